@@ -1,0 +1,105 @@
+"""The model contract: what a simulation model declares and returns."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import SignalError
+from ..excitation import Chirp
+from ..params import ParameterSet
+
+
+@dataclass
+class Signals:
+    """Sampled signals of one run (simulated or measured).
+
+    ``force`` is the excitation force (N, the FRF input); ``channels`` maps a sensor name to
+    its samples (accelerations in m/s^2); ``f_inst`` is the sweep's instantaneous frequency
+    per sample (Hz), the rotation frequency of the order analysis.
+    """
+
+    t: np.ndarray
+    force: np.ndarray
+    channels: dict[str, np.ndarray]
+    fs: float
+    f_inst: np.ndarray | None = None
+    units: dict[str, str] = field(default_factory=dict)
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        for name, x in [("force", self.force), *self.channels.items()]:
+            if len(x) != n:
+                raise SignalError(f"signal {name!r} has {len(x)} samples, time has {n}")
+
+    def channel(self, name: str) -> np.ndarray:
+        if name == "force":
+            return self.force
+        try:
+            return self.channels[name]
+        except KeyError:
+            raise SignalError(
+                f"no channel {name!r}; available: {', '.join(['force', *self.channels])}"
+            ) from None
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """Flat dict of arrays (for ``np.savez``)."""
+        out = {"t": self.t, "force": self.force, "fs": np.array(self.fs)}
+        if self.f_inst is not None:
+            out["f_inst"] = self.f_inst
+        out.update({f"ch:{k}": v for k, v in self.channels.items()})
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays: Mapping[str, np.ndarray], **kw) -> Signals:
+        channels = {k[3:]: np.asarray(v) for k, v in arrays.items() if k.startswith("ch:")}
+        f_inst = arrays["f_inst"] if "f_inst" in arrays else None
+        return cls(t=np.asarray(arrays["t"]), force=np.asarray(arrays["force"]),
+                   channels=channels, fs=float(arrays["fs"]), f_inst=f_inst, **kw)
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Time integration settings that enter the run hash."""
+
+    method: str = "RK44"
+    step: float = 5e-6
+    timeout: float | None = None  # wall seconds per run; None = no limit
+
+    def to_dict(self) -> dict:
+        return {"method": self.method, "step": self.step}
+
+
+class Model(ABC):
+    """A simulation model plugin (group ``sensfw.models``).
+
+    Subclasses declare ``name``, ``version``, their :meth:`parameters` (name, unit, nominal,
+    bounds), the default grouping of parameters into design variables (:meth:`groups`) and
+    their ``sensors``; :meth:`simulate` turns a full parameter dict and an excitation into
+    :class:`Signals`.
+    """
+
+    name: str = "model"
+    version: str = "0"
+    sensors: tuple[str, ...] = ()
+    default_output: str = ""
+
+    @abstractmethod
+    def parameters(self) -> ParameterSet: ...
+
+    def groups(self) -> dict[str, tuple[str, ...]]:
+        return {}
+
+    def options(self) -> dict:
+        """Model options that change results (enter the run hash)."""
+        return {}
+
+    @abstractmethod
+    def simulate(
+        self, params: Mapping[str, float], excitation: Chirp,
+        solver: SolverSettings | None = None,
+    ) -> Signals: ...
