@@ -54,7 +54,8 @@ class SimulationError(SensfwError, RuntimeError):
         self.model, self.reason = model, reason
         self.parameters = dict(parameters or {})
         values = ", ".join(f"{k}={v:.6g}" for k, v in self.parameters.items())
-        super().__init__(f"{model} simulation failed: {reason}" + (f" [{values}]" if values else ""))
+        where = f" [{values}]" if values else ""
+        super().__init__(f"{model} simulation failed: {reason}{where}")
 
 
 class SignalError(SensfwError, ValueError):

@@ -56,7 +56,7 @@ def log_chirp(
         ``rpm(t)/60`` of Eq. 17 used to convert frequency to order (Eq. 14).
     """
     _check_sweep(f0, f1, duration, fs)
-    n = int(round(duration * fs))
+    n = round(duration * fs)
     t = np.arange(n) / fs
     return t, amplitude * np.sin(chirp_phase(t, f0, f1, duration)), chirp_frequency(
         t, f0, f1, duration
@@ -90,7 +90,7 @@ class Chirp:
 
     @property
     def n_samples(self) -> int:
-        return int(round((self.duration + self.tail) * self.fs))
+        return round((self.duration + self.tail) * self.fs)
 
     def time(self) -> np.ndarray:
         return np.arange(self.n_samples) / self.fs

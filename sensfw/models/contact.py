@@ -1,0 +1,137 @@
+"""Contact and friction laws as Exudyn symbolic expressions (paper Eqs. 2-3, Adams style).
+
+These functions take and return ``exudyn.symbolic.Real`` expressions (or plain floats, for
+testing with numbers), so the whole contact set of a model compiles into one symbolic user
+function that Exudyn evaluates in C++ during time integration; no Python runs in the time
+loop. The same functions evaluate with numpy through :mod:`sensfw.models.contact_numpy`-style
+callers because they only use ``+ - * /`` and the small set of functions passed as ``ops``.
+
+Units: all arguments in SI (m, m/s, N); stiffness ``k`` in N/m^b (see
+:func:`stiffness_si`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+Expr = Any  # exudyn.symbolic.Real or float
+
+
+def symbolic_ops() -> SimpleNamespace:
+    """Elementary functions on ``exudyn.symbolic.Real``."""
+    import exudyn as exu
+
+    esym = exu.symbolic
+    return SimpleNamespace(
+        max=lambda a, b: esym.max(_real(a), _real(b)),
+        min=lambda a, b: esym.min(_real(a), _real(b)),
+        pow=lambda a, b: esym.pow(_real(a), _real(b)),
+        where=lambda c, a, b: esym.IfThenElse(c, _real(a), _real(b)),
+        abs=lambda a: esym.abs(_real(a)),
+        sign=lambda a: esym.sign(_real(a)),
+        sin=esym.sin,
+        exp=esym.exp,
+    )
+
+
+def numpy_ops() -> SimpleNamespace:
+    """The same functions on numpy arrays/floats (for tests and static equilibrium)."""
+    return SimpleNamespace(
+        max=np.maximum, min=np.minimum, pow=lambda a, b: np.power(np.maximum(a, 0.0), b),
+        where=np.where, abs=np.abs, sign=np.sign, sin=np.sin, exp=np.exp,
+    )
+
+
+def _real(x):
+    import exudyn as exu
+
+    return x if isinstance(x, exu.symbolic.Real) else exu.symbolic.Real(float(x))
+
+
+def step(ops, x: Expr, x0: float, h0: float, x1: float, h1: float) -> Expr:
+    """Adams ``STEP(x, x0, h0, x1, h1)``: cubic blend from ``h0`` at ``x0`` to ``h1`` at ``x1``
+    (constant outside), ``h0 + (h1 - h0) s^2 (3 - 2 s)`` with ``s`` clamped to [0, 1]."""
+    s = ops.min(ops.max((x - x0) * (1.0 / (x1 - x0)), 0.0), 1.0)
+    return h0 + (h1 - h0) * s * s * (3.0 - 2.0 * s)
+
+
+def impact_force(ops, delta: Expr, delta_dot: Expr, k: float, b: float, c: float,
+                 dmax: float) -> Expr:
+    """Normal force of a penalty contact, Eq. 2 with Adams IMPACT damping.
+
+    ``F = k delta^b + STEP(delta, 0, 0, dmax, c) * delta_dot`` for ``delta > 0`` (closed),
+    zero when open; the damping ramps in over the penetration ``dmax`` so the force is
+    continuous at first touch. The force is clipped at zero (a contact pushes, never pulls),
+    which Adams leaves to the user. The closed branch is only evaluated when closed (Exudyn's
+    ``IfThenElse`` is lazy), which keeps open contacts nearly free.
+
+    Parameters
+    ----------
+    delta, delta_dot : penetration (m) and its rate (m/s); positive closes the contact.
+    k : stiffness in N/m^b.  b : force exponent.  c : maximum damping, N s/m.
+    dmax : penetration (m) at which the full damping ``c`` is reached.
+    """
+    s = ops.min(delta * (1.0 / dmax), 1.0)
+    closed = k * ops.pow(delta, b) + c * (s * s * (3.0 - 2.0 * s)) * delta_dot
+    return ops.where(delta > 0.0, ops.max(closed, 0.0), 0.0)
+
+
+def clearance_force(ops, e: Expr, e_dot: Expr, gap: float, k: float, b: float, c: float,
+                    dmax: float) -> Expr:
+    """Signed force of a two-sided contact with play ``gap`` on each side (a shaft in a bore).
+
+    ``e`` is the relative displacement along the contact normal; the contact closes when
+    ``|e| > gap`` with penetration ``|e| - gap`` and pushes back: the result is the force on
+    the moving part, ``-sign(e) F(|e| - gap)`` (Eq. 2 on the closed side)."""
+    sgn = ops.sign(e)
+    return -sgn * impact_force(ops, ops.abs(e) - gap, sgn * e_dot, k, b, c, dmax)
+
+
+def friction_coefficient(ops, v: Expr, mu_s: float, mu_d: float, v_s: float,
+                         v_t: float) -> Expr:
+    """Regularised stick-slip coefficient ``mu(v)`` (Eq. 3, Adams convention).
+
+    ``|v| <= v_s``: ``STEP(v, -v_s, -mu_s, v_s, mu_s)`` (so ``mu(0) = 0``);
+    ``v_s < |v| <= v_t``: ``sign(v) STEP(|v|, v_s, mu_s, v_t, mu_d)``;
+    ``|v| > v_t``: ``sign(v) mu_d``. Requires ``v_s < v_t`` (stiction transition velocity
+    below the friction transition velocity).
+    """
+    av = ops.abs(v)
+    inner = step(ops, v, -v_s, -mu_s, v_s, mu_s)
+    outer = ops.where(av >= v_t, mu_d, step(ops, av, v_s, mu_s, v_t, mu_d))
+    return ops.where(av <= v_s, inner, ops.sign(v) * outer)
+
+
+def stiffness_si(k_n_per_mm: float, b: float) -> float:
+    """Contact stiffness given in N/mm^b (Table 1: force in N for a penetration in mm)
+    converted to N/m^b: ``F = k (1000 delta_m)^b = (k 1000^b) delta_m^b``."""
+    return float(k_n_per_mm) * 1000.0**b
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """Normal law of one contact in SI units."""
+
+    k: float  # N/m^b
+    b: float
+    c: float  # N s/m
+    dmax: float  # m
+
+    def force(self, ops, delta: Expr, delta_dot: Expr) -> Expr:
+        return impact_force(ops, delta, delta_dot, self.k, self.b, self.c, self.dmax)
+
+    def clearance(self, ops, e: Expr, e_dot: Expr, gap: float) -> Expr:
+        return clearance_force(ops, e, e_dot, gap, self.k, self.b, self.c, self.dmax)
+
+    def static_deflection(self, force: float) -> float:
+        """Penetration (m) that carries ``force`` N statically."""
+        return (max(force, 0.0) / self.k) ** (1.0 / self.b)
+
+    def tangent_stiffness(self, force: float) -> float:
+        """dF/d(delta) at the static penetration for ``force`` (N/m)."""
+        d = self.static_deflection(force)
+        return self.k * self.b * d ** (self.b - 1.0) if d > 0 else 0.0
