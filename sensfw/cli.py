@@ -1,0 +1,179 @@
+"""The ``sensfw`` command line (typer + rich).
+
+User errors (study file, measurement file, plugin name, a stage that cannot be analysed) are
+printed without a traceback and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from .errors import SensfwError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Which parameters of a nonlinear multibody model matter, and does the "
+                       "model agree with the rig?")
+console = Console(stderr=True)
+out = Console()
+
+
+def _user_errors(fn):
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except SensfwError as err:
+            console.print(f"[bold red]error:[/] {err}", highlight=False, markup=True,
+                          soft_wrap=True)
+            raise typer.Exit(code=2) from None
+        except KeyboardInterrupt:
+            console.print("[yellow]interrupted; finished runs are kept in the run store[/]")
+            raise typer.Exit(code=130) from None
+    return wrapper
+
+
+class RichProgress:
+    """Runs done/failed with ETA, one bar per batch of runs."""
+
+    def __init__(self, enabled: bool = True):
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.enabled = enabled
+        self._progress = Progress(
+            TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("[red]{task.fields[failed]} failed"),
+            TextColumn("cached {task.fields[cached]}"),
+            TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+            console=console, disable=not enabled, transient=False)
+        self._task = None
+
+    def start(self, label: str, total: int, cached: int) -> None:
+        if not self._progress.live.is_started:
+            self._progress.start()
+        self._task = self._progress.add_task(label, total=total, completed=cached, failed=0,
+                                             cached=cached)
+
+    def advance(self, ok: bool) -> None:
+        task = self._progress.tasks[self._task]
+        self._progress.update(self._task, advance=1,
+                              failed=task.fields["failed"] + (0 if ok else 1))
+
+    def stop(self) -> None:
+        pass
+
+    def close(self) -> None:
+        if self._progress.live.is_started:
+            self._progress.stop()
+
+
+def _runner(study, out_dir: Path, workers, backend, scheduler, retry_failed=False,
+            progress=True):
+    from .runs import Runner, RunStore
+
+    ex = study.spec.execution
+    return Runner(store=RunStore(out_dir / "runs"),
+                  backend=backend or ("dask" if scheduler else ex.backend),
+                  workers=workers or ex.workers, scheduler=scheduler or ex.scheduler,
+                  progress=RichProgress(progress), retry_failed=retry_failed)
+
+
+@app.command()
+@_user_errors
+def run(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    out_dir: Annotated[Path, typer.Option("--out", "-o", help="output folder")] = Path("out"),
+    workers: Annotated[int | None, typer.Option(help="worker processes (default: cores)")] = None,
+    backend: Annotated[str | None, typer.Option(help="serial | processes | dask")] = None,
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")] = None,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="print the plan, run nothing")] = False,
+    retry_failed: Annotated[bool, typer.Option(help="recompute runs that failed before")] = False,
+    report: Annotated[bool, typer.Option(help="write report.html")] = True,
+    progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+) -> None:
+    """Run a study: screen, design of experiments, Eq. 18 regression, report."""
+    from .pipeline import plan, results_json, run_study
+    from .study import Study
+
+    study = Study.load(study_file)
+    if dry_run:
+        table = Table(title=f"plan of study {study.name!r}")
+        for col in ("stage", "design", "variables", "runs", "scorers", "surrogates"):
+            table.add_column(col)
+        total = 0
+        for p in plan(study):
+            total += p["n_runs"]
+            table.add_row(p["stage"], p["design"], p["variables"], str(p["n_runs"]),
+                          ", ".join(p["scorers"]), ", ".join(p["surrogates"]))
+        out.print(table)
+        out.print(f"at most {total} runs (+1 nominal reference); cached runs are not recomputed")
+        return
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runner = _runner(study, out_dir, workers, backend, scheduler, retry_failed, progress)
+    t0 = time.perf_counter()
+    try:
+        result = run_study(study, runner, log=lambda s: console.print(f"[cyan]{s}"))
+    finally:
+        runner.progress.close()
+    data = results_json(result)
+    (out_dir / "results.json").write_text(json.dumps(data, indent=1, sort_keys=False))
+    (out_dir / "timing.json").write_text(json.dumps(
+        {"wall_s": time.perf_counter() - t0, "runs": runner.counts.as_dict()}, indent=1))
+    if report:
+        from .report.study import write_study_report
+
+        write_study_report(result, out_dir / "report.html")
+    c = runner.counts
+    out.print(f"study {study.name!r}: {c.total} runs ({c.new} new, {c.cached} cached, "
+              f"{c.failed} failed) in {time.perf_counter() - t0:.1f} s -> {out_dir}")
+    for st in data["stages"]:
+        if "selected" in st:
+            out.print(f"  {st['name']}: selected {', '.join(st['selected'])}")
+        for label, reg in st.get("regression", {}).items():
+            out.print(f"  {st['name']}: {label} R2adj={reg['r2_adj']:.3f} Q2={reg['q2']:.3f}")
+
+
+@app.command()
+@_user_errors
+def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]) -> None:
+    """Check a study file and print its plan."""
+    from .study import Study
+
+    study = Study.load(study_file)
+    out.print(f"study {study.name!r} is valid: model {study.spec.model.name}, "
+              f"{len(study.variable_names())} design variables, {len(study.stages)} stages")
+
+
+@app.command()
+@_user_errors
+def plugins() -> None:
+    """List every registered plugin with its origin."""
+    from .plugins import ALL
+
+    table = Table(title="sensfw plugins")
+    table.add_column("kind")
+    table.add_column("name")
+    table.add_column("origin")
+    for kind, reg in ALL.items():
+        for name in reg.names():
+            table.add_row(kind, name, reg.origin(name))
+    out.print(table)
+
+
+def main() -> None:  # pragma: no cover
+    sys.exit(app())

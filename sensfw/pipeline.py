@@ -1,0 +1,327 @@
+"""Run a study end to end: stage by stage, design -> runs -> scores -> analysis/surrogates.
+
+The paper's three steps are the default study (``studies/paper.toml``): an OAT screen scored
+by the FRF scalar selects variables, a 3-level full factorial on them is scored by order
+amplitudes and THD, and Eq. 18 is fitted to each score. Everything a report needs is kept in
+:class:`StageResult`; :func:`results_json` turns the study into the machine-readable summary.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .errors import AnalysisError, SensfwError
+from .models.base import Signals
+from .params import DesignSpace
+from .runs import Runner, RunSpec
+from .study import StageSpec, Study
+
+
+@dataclass
+class StageResult:
+    """Everything one stage produced."""
+
+    spec: StageSpec
+    space: DesignSpace
+    table: pd.DataFrame  # physical design-variable values, index = run labels
+    keys: list[str]  # run key of each row
+    scores: pd.DataFrame  # rows = run labels, columns = scorer labels (NaN = failed)
+    reference_key: str | None = None
+    screening: object | None = None  # the design's analysis (ScreeningResult)
+    selected: list[str] | None = None
+    surrogates: dict[str, dict[str, object]] = field(default_factory=dict)  # label -> name -> est
+    regression: dict[str, dict] = field(default_factory=dict)
+    validation: dict[str, dict] = field(default_factory=dict)
+    failed: dict[str, str] = field(default_factory=dict)  # run label -> error
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+
+@dataclass
+class StudyResult:
+    study: Study
+    stages: list[StageResult]
+    runner: Runner
+
+
+def stage_variables(study: Study, stage: StageSpec, done: dict[str, StageResult]) -> list[str]:
+    if isinstance(stage.variables, list):
+        return list(stage.variables)
+    if stage.variables == "all":
+        return study.variable_names()
+    ref = stage.variables.split(":", 1)[1]
+    selected = done[ref].selected or []
+    if not selected:
+        raise AnalysisError(f"stage {stage.name!r}: stage {ref!r} selected no variables")
+    return selected
+
+
+def make_specs(study: Study, space: DesignSpace, table: pd.DataFrame) -> list[RunSpec]:
+    specs = []
+    for _, row in table.iterrows():
+        params = space.to_parameters(row.to_dict())
+        specs.append(RunSpec.create(study.model, params, study.excitation, study.solver,
+                                    study.model_ref()))
+    return specs
+
+
+def reference_spec(study: Study) -> RunSpec:
+    """The nominal run (every parameter at its nominal value): the FRF reference H_v,0."""
+    return RunSpec.create(study.model, study.parameters.nominal(), study.excitation,
+                          study.solver, study.model_ref())
+
+
+def make_scorers(study: Study, stage: StageSpec) -> dict[str, object]:
+    from .scorers import make_scorer
+
+    out = {}
+    for sc in stage.scorers:
+        out[sc.key] = make_scorer(sc.name, channel=sc.channel or study.output, **sc.options())
+    return out
+
+
+def score_runs(scorers: dict[str, object], runner: Runner, keys: list[str],
+               labels: list[str], reference: Signals | None) -> tuple[pd.DataFrame, dict]:
+    """Score every run; failed runs give NaN rows and an entry in the failure dict."""
+    rows, failed = [], {}
+    for label, key in zip(labels, keys, strict=True):
+        res = runner.load(key)
+        row: dict[str, float] = {}
+        if res is None or not res.ok:
+            failed[label] = "missing from the store" if res is None else res.error
+        else:
+            for name, scorer in scorers.items():
+                values = scorer.score(res.signals, reference)
+                if len(values) == 1:
+                    row[name] = float(next(iter(values.values())))
+                else:
+                    row.update({f"{name}.{k}": float(v) for k, v in values.items()})
+        rows.append(row)
+    frame = pd.DataFrame(rows, index=labels)
+    return frame, failed
+
+
+def _select(stage: StageSpec, screening, scores: pd.DataFrame) -> list[str]:
+    sel = stage.select
+    return list(screening.select(threshold=sel.threshold, max_variables=sel.max_variables))
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        x = float(x)
+        return x if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, pd.DataFrame):
+        return _jsonable(x.to_dict(orient="records"))
+    if isinstance(x, pd.Series):
+        return _jsonable(x.to_dict())
+    return x
+
+
+def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd.DataFrame,
+                   scores: pd.DataFrame, result: StageResult) -> None:
+    """Fit every requested surrogate to every score; Eq. 18 statistics go to ``regression``,
+    the validation of every surrogate to ``validation``."""
+    from .analysis.validation import validate
+    from .surrogates import make_surrogate
+
+    bounds = {v.name: (v.low, v.high) for v in space.variables}
+    for label in scores.columns:
+        y = scores[label].to_numpy(dtype=float)
+        ok = np.isfinite(y)
+        X = table.loc[ok, space.names]
+        if ok.sum() < 3:
+            result.notes.append(f"{label}: only {ok.sum()} finished runs, no surrogate fitted")
+            continue
+        result.surrogates[label] = {}
+        result.validation[label] = {}
+        for name in stage.surrogates:
+            opts = dict(stage.surrogate_options.get(name, {}))
+            if name in ("eq18", "gaussian_process", "polynomial") and "bounds" not in opts:
+                opts["bounds"] = [bounds[n] for n in space.names]
+            try:
+                est = make_surrogate(name, **opts).fit(X, y[ok])
+            except SensfwError as err:
+                result.notes.append(f"{label}/{name}: {err}")
+                continue
+            result.surrogates[label][name] = est
+            result.validation[label][name] = validate(est, X, y[ok], seed=study.spec.study.seed)
+            summary = getattr(est, "summary_", None)
+            if summary is not None and label not in result.regression:
+                coefs = getattr(est, "coefficients_physical_", None)
+                if coefs is None:
+                    coefs = est.coefficients_
+                result.regression[label] = {
+                    "surrogate": name,
+                    **{k: summary.get(k) for k in ("r2", "r2_adj", "q2", "f_stat", "f_pvalue",
+                                                   "n_obs")},
+                    "coefficients": _jsonable(coefs[["term", "estimate", "se", "t", "p"]]),
+                    "coefficients_coded": _jsonable(
+                        est.coefficients_[["term", "estimate", "se", "t", "p"]]),
+                }
+
+
+def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner: Runner,
+            result: StageResult, scorers: dict, reference: Signals | None) -> None:
+    """Confirmation runs: new random points inside the bounds, simulated and compared with
+    each surrogate's prediction (error and prediction-interval coverage)."""
+    from scipy.stats import qmc
+
+    from .analysis.validation import confirmation
+
+    n = stage.confirmation_runs
+    sampler = qmc.LatinHypercube(d=len(space), seed=study.spec.study.seed + 7919)
+    table = space.decode(2 * sampler.random(n) - 1)
+    table.index = [f"confirm:{i:03d}" for i in range(n)]
+    specs = make_specs(study, space, table)
+    runner.run(specs, label=f"{stage.name} confirmation")
+    keys = [s.key() for s in specs]
+    scores, failed = score_runs(scorers, runner, keys, list(table.index), reference)
+    for label, per in result.surrogates.items():
+        y = scores[label].to_numpy(dtype=float) if label in scores else np.full(n, np.nan)
+        ok = np.isfinite(y)
+        for name, est in per.items():
+            try:
+                result.validation[label][name]["confirmation"] = confirmation(
+                    est, table.loc[ok, space.names], y[ok])
+            except SensfwError as err:
+                result.validation[label][name]["confirmation"] = {"error": str(err)}
+    if failed:
+        result.notes.append(f"{len(failed)} confirmation run(s) failed")
+
+
+def run_stage(study: Study, stage: StageSpec, runner: Runner,
+              done: dict[str, StageResult]) -> StageResult:
+    from .designs import make_design
+
+    variables = stage_variables(study, stage, done)
+    space = study.space(stage, variables)
+    design = make_design(stage.design, **stage.design_options)
+    table = design.generate(space, seed=study.spec.study.seed)
+    specs = make_specs(study, space, table)
+    scorers = make_scorers(study, stage)
+    needs_ref = any(getattr(s, "needs_reference", False) for s in scorers.values())
+    ref = reference_spec(study) if needs_ref else None
+    runner.run(specs + ([ref] if ref else []), label=stage.name)
+    reference = None
+    if ref is not None:
+        res = runner.load(ref.key())
+        if res is None or not res.ok:
+            raise AnalysisError(f"stage {stage.name!r}: the nominal reference run failed "
+                                f"({res.error if res else 'missing'}); FRF-based scores need it")
+        reference = res.signals
+    keys = [s.key() for s in specs]
+    scores, failed = score_runs(scorers, runner, keys, list(table.index), reference)
+    result = StageResult(spec=stage, space=space, table=table, keys=keys, scores=scores,
+                         reference_key=ref.key() if ref else None, failed=failed)
+    if failed:
+        result.notes.append(f"{len(failed)} of {len(table)} runs failed and were left out: "
+                            + "; ".join(f"{k}: {v.splitlines()[0] if v else v}"
+                                        for k, v in list(failed.items())[:5]))
+    if stage.select is not None:
+        by = stage.select.by or stage.scorers[0].key
+        result.screening = design.analyze(space, table, scores[by].to_numpy(dtype=float))
+        result.notes.extend(getattr(result.screening, "notes", []))
+        result.selected = _select(stage, result.screening, scores)
+    elif not stage.surrogates:
+        by = stage.scorers[0].key
+        try:
+            result.screening = design.analyze(space, table, scores[by].to_numpy(dtype=float))
+        except SensfwError as err:
+            result.notes.append(f"analysis of {stage.design}: {err}")
+    if stage.surrogates:
+        fit_surrogates(study, stage, space, table, scores, result)
+        if stage.confirmation_runs:
+            confirm(study, stage, space, runner, result, scorers, reference)
+    return result
+
+
+def run_study(study: Study, runner: Runner,
+              log: Callable[[str], None] = lambda s: None) -> StudyResult:
+    done: dict[str, StageResult] = {}
+    stages = []
+    for stage in study.stages:
+        log(f"stage {stage.name}: design {stage.design}")
+        res = run_stage(study, stage, runner, done)
+        done[stage.name] = res
+        stages.append(res)
+        if res.selected is not None:
+            log(f"stage {stage.name}: selected {', '.join(res.selected) or '(none)'}")
+    return StudyResult(study=study, stages=stages, runner=runner)
+
+
+def plan(study: Study) -> list[dict]:
+    """Run counts of every stage before anything runs (``--dry-run``)."""
+    from .designs import make_design
+
+    out = []
+    n_selected: dict[str, int] = {}
+    for stage in study.stages:
+        design = make_design(stage.design, **stage.design_options)
+        if isinstance(stage.variables, str) and stage.variables.startswith("selected:"):
+            ref = stage.variables.split(":", 1)[1]
+            k = n_selected.get(ref, 0)
+            names = None
+            note = f"up to {k} variables selected by {ref!r}"
+        else:
+            names = stage_variables(study, stage, {})
+            k = len(names)
+            note = f"{k} variables"
+        if k:
+            space = study.space(stage, names if names is not None else
+                                study.variable_names()[:k])
+            n = design.n_runs(space)
+        else:
+            n = 0
+        if stage.select is not None:
+            n_selected[stage.name] = stage.select.max_variables or k
+        out.append({"stage": stage.name, "design": stage.design, "variables": note,
+                    "n_runs": int(n), "scorers": [s.key for s in stage.scorers],
+                    "surrogates": list(stage.surrogates),
+                    "confirmation_runs": stage.confirmation_runs})
+    return out
+
+
+def results_json(res: StudyResult) -> dict:
+    """The machine-readable summary (``results.json``); deterministic for identical runs."""
+    stages = []
+    for st in res.stages:
+        entry: dict = {
+            "name": st.name, "design": st.spec.design, "n_runs": len(st.table),
+            "variables": st.space.names,
+            "runs": [{"label": lab, "key": key, **{v: float(st.table.loc[lab, v])
+                                                    for v in st.space.names}}
+                     for lab, key in zip(st.table.index, st.keys, strict=True)],
+            "failed": st.failed,
+            "scores": {c: st.scores[c].to_dict() for c in st.scores.columns},
+        }
+        if st.screening is not None:
+            entry["importance"] = st.screening.importance.to_dict()
+            entry["analysis"] = _jsonable(st.screening.table.reset_index())
+        if st.selected is not None:
+            entry["sensitivity"] = st.screening.importance.to_dict()
+            entry["selected"] = list(st.selected)
+        if st.regression:
+            entry["regression"] = st.regression
+        if st.validation:
+            entry["validation"] = st.validation
+        if st.notes:
+            entry["notes"] = st.notes
+        stages.append(entry)
+    return _jsonable({"study": res.study.name, "runs": res.runner.counts.as_dict(),
+                      "stages": stages})

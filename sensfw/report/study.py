@@ -1,0 +1,230 @@
+"""The study report: the figures a reader of the paper expects (Figs. 7-11) per stage."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from .html import Page
+
+
+def _signals(result, key):
+    res = result.runner.load(key)
+    return res.signals if res is not None and res.ok else None
+
+
+def _frf_db(sig, channel):
+    from ..signal import frf
+
+    f, H = frf(sig.force, sig.channel(channel), sig.fs, estimator="Hv")
+    with np.errstate(divide="ignore"):
+        return f, 20 * np.log10(np.abs(H))
+
+
+def frf_overlay(result, stage, channel, top: int = 4):
+    """Fig. 7: FRFs of the min/max runs of the most sensitive variables over the reference."""
+    ref = _signals(result, stage.reference_key) if stage.reference_key else None
+    fig, ax = plt.subplots(figsize=(10, 4.6))
+    band = (result.study.excitation.f0, result.study.excitation.f1)
+    if ref is not None:
+        f, db = _frf_db(ref, channel)
+        sel = (f >= band[0]) & (f <= band[1])
+        ax.semilogx(f[sel], db[sel], color="k", lw=1.6, label="reference (nominal)", zorder=5)
+    ranking = list(stage.screening.ranking[:top]) if stage.screening is not None else []
+    colors = plt.cm.tab10(np.linspace(0, 1, 10))
+    for i, var in enumerate(ranking):
+        for lvl, ls in (("min", "--"), ("max", "-")):
+            label = f"{var}:{lvl}"
+            if label not in stage.table.index:
+                continue
+            sig = _signals(result, stage.keys[list(stage.table.index).index(label)])
+            if sig is None:
+                continue
+            f, db = _frf_db(sig, channel)
+            sel = (f >= band[0]) & (f <= band[1])
+            ax.semilogx(f[sel], db[sel], ls=ls, lw=0.9, color=colors[i % 10],
+                        label=f"{var} {lvl}")
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel(f"|H| (dB re 1 (m/s²)/N), {channel}")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    ax.set_title("FRF from shaker force to the output, screen runs against the reference")
+    return fig
+
+
+def sensitivity_bars(stage, threshold: float | None):
+    """Fig. 8: normalised sensitivity with the selection threshold."""
+    imp = stage.screening.importance.sort_values(ascending=False)
+    fig, ax = plt.subplots(figsize=(10, 0.28 * len(imp) + 1.5))
+    selected = set(stage.selected or [])
+    colors = ["#1f6fd1" if v in selected else "#9aa5b1" for v in imp.index]
+    ax.barh(range(len(imp)), imp.to_numpy() * 100, color=colors)
+    ax.set_yticks(range(len(imp)), imp.index, fontsize=8)
+    ax.invert_yaxis()
+    if threshold is not None:
+        ax.axvline(threshold * 100, color="r", ls="--", lw=1, label=f"threshold {threshold:.0%}")
+        ax.legend(loc="lower right")
+    ax.set_xlabel("normalised sensitivity (%)")
+    ax.set_title("Screen: normalised sensitivity (blue: selected)")
+    ax.grid(True, axis="x", alpha=0.3)
+    return fig
+
+
+def order_spectrum_mean(result, stage, channel):
+    """Fig. 9: averaged order spectrum of the stage's runs."""
+    from ..signal import order_spectrum
+
+    spectra, orders = [], None
+    for key in stage.keys:
+        sig = _signals(result, key)
+        if sig is None:
+            continue
+        n, P = order_spectrum(sig.channel(channel), sig.fs, sig.f_inst)
+        if orders is None:
+            orders = n
+        if len(n) == len(orders):
+            spectra.append(P)
+    fig, ax = plt.subplots(figsize=(10, 4))
+    if spectra:
+        P = np.mean(spectra, axis=0)
+        ax.semilogy(orders, P, lw=1)
+        for k in range(1, int(orders.max()) + 1):
+            ax.axvline(k, color="r", lw=0.6, alpha=0.4)
+    ax.set_xlabel("order")
+    ax.set_ylabel("RMS amplitude (m/s²)")
+    ax.set_title(f"Averaged order spectrum of {len(spectra)} runs ({channel})")
+    ax.grid(True, which="both", alpha=0.3)
+    return fig
+
+
+def actual_vs_predicted(stage):
+    """Fig. 10a: actual vs predicted for each score (the first surrogate of each)."""
+    labels = [lab for lab in stage.surrogates if stage.surrogates[lab]]
+    fig, axes = plt.subplots(1, max(len(labels), 1), figsize=(4.2 * max(len(labels), 1), 4))
+    axes = np.atleast_1d(axes)
+    for ax, label in zip(axes, labels, strict=False):
+        y = stage.scores[label].to_numpy(dtype=float)
+        ok = np.isfinite(y)
+        X = stage.table.loc[ok, stage.space.names]
+        for name, est in stage.surrogates[label].items():
+            yp = est.predict(X)
+            ax.plot(y[ok], yp, "o", ms=3.5, label=name, alpha=0.8)
+        lo, hi = np.nanmin(y), np.nanmax(y)
+        ax.plot([lo, hi], [lo, hi], "k--", lw=0.8)
+        reg = stage.regression.get(label)
+        title = label + (f"  R²adj={reg['r2_adj']:.3f}" if reg else "")
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("simulated")
+        ax.set_ylabel("predicted")
+        ax.legend(fontsize=7)
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def residual_plots(stage, label: str, name: str):
+    """Residuals against fitted values and normal Q-Q of one surrogate."""
+    v = stage.validation[label][name]
+    fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.4))
+    if "fitted" in v and "residuals" in v:
+        a.plot(v["fitted"], v["residuals"], "o", ms=3)
+        a.axhline(0, color="k", lw=0.8)
+    a.set_xlabel("fitted")
+    a.set_ylabel("residual")
+    a.set_title(f"{label} / {name}: residuals")
+    qq = v.get("qq")
+    if qq:
+        b.plot(qq["theoretical"], qq["ordered"], "o", ms=3)
+        t = np.asarray(qq["theoretical"])
+        if "slope" in qq:
+            b.plot(t, qq["slope"] * t + qq["intercept"], "r-", lw=0.8)
+    b.set_xlabel("theoretical quantile")
+    b.set_ylabel("ordered residual")
+    b.set_title("normal Q-Q")
+    for ax in (a, b):
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def spectrograms(result, stage, channel):
+    """Fig. 11: spectrograms of the first and last run of the stage."""
+    from ..signal import spectrogram
+
+    picks = [(stage.table.index[0], stage.keys[0]), (stage.table.index[-1], stage.keys[-1])]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4), sharey=True)
+    for ax, (label, key) in zip(axes, picks, strict=True):
+        sig = _signals(result, key)
+        if sig is None:
+            ax.set_title(f"{label}: failed")
+            continue
+        f, t, S = spectrogram(sig.channel(channel), sig.fs)
+        vmax = np.nanmax(S)
+        im = ax.pcolormesh(t, f, S, shading="auto", vmin=vmax - 80, vmax=vmax, cmap="viridis")
+        ax.set_title(f"run {label}")
+        ax.set_xlabel("time (s)")
+    axes[0].set_ylabel("frequency (Hz)")
+    fig.colorbar(im, ax=axes, label="dB")
+    return fig
+
+
+def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
+    frame = pd.DataFrame(reg["coefficients"]).set_index("term")
+    sig = (frame["p"] < 0.05).fillna(False)
+    return frame, sig
+
+
+def write_study_report(result, path: str | Path) -> Path:
+    study = result.study
+    ex = study.excitation
+    c = result.runner.counts
+    page = Page(f"sensfw study report: {study.name}", study.spec.study.description)
+    page.p(f"Model {study.spec.model.name}, output channel {study.output}; log chirp "
+           f"{ex.f0:g} Hz -> {ex.f1:g} Hz in {ex.duration:g} s at {ex.fs:g} Hz, amplitude "
+           f"{ex.amplitude:g} N; solver {study.solver.method}, step {study.solver.step:g} s.")
+    page.p(f"Runs: {c.total} in total, {c.new} computed now, {c.cached} from the run store, "
+           f"{c.failed} failed.")
+    if c.failed:
+        page.note(f"{c.failed} run(s) failed; the analyses below use the others (see each "
+                  "stage).")
+    for stage in result.stages:
+        page.h2(f"Stage {stage.name}: {stage.spec.design} on {len(stage.space)} variables, "
+                f"{len(stage.table)} runs")
+        for n in stage.notes:
+            page.note(n)
+        if stage.selected is not None:
+            page.figure(frf_overlay(result, stage, study.output),
+                        "Fig. 7 analogue: FRFs (Hv) of the min (dashed) and max (solid) runs of "
+                        "the most sensitive variables over the nominal reference.")
+            page.figure(sensitivity_bars(stage, stage.spec.select.threshold),
+                        "Fig. 8 analogue: normalised sensitivity from the FRF scalar.")
+            page.p("Selected for the next stage: " + (", ".join(stage.selected) or "none"),
+                   "ok")
+        elif stage.screening is not None:
+            page.figure(sensitivity_bars(stage, None), f"{stage.spec.design}: importance")
+        if stage.screening is not None:
+            tab = stage.screening.table
+            page.table(tab if isinstance(tab, pd.DataFrame) else pd.DataFrame(tab))
+        if stage.surrogates:
+            page.figure(order_spectrum_mean(result, stage, study.output),
+                        "Fig. 9 analogue: averaged order spectrum of the stage's runs.")
+            page.figure(actual_vs_predicted(stage),
+                        "Fig. 10a analogue: simulated against predicted scores.")
+            for label, reg in stage.regression.items():
+                page.h3(f"{label}: Eq. 18 ({reg['surrogate']}) R²={reg['r2']:.4f}, "
+                        f"R²adj={reg['r2_adj']:.4f}, Q²(LOO)={reg['q2']:.4f}, "
+                        f"F={reg['f_stat']:.4g} (p={reg['f_pvalue']:.3g}), n={reg['n_obs']}")
+                frame, sig = _coef_table(reg)
+                page.table(frame, highlight=sig)
+                page.p("Highlighted: p < 0.05. Coefficients in physical units (Fig. 10b).",
+                       "meta")
+            for label, per in stage.validation.items():
+                for name in per:
+                    page.figure(residual_plots(stage, label, name),
+                                f"{label} / {name}: residuals against fitted values, normal Q-Q.")
+            page.figure(spectrograms(result, stage, study.output),
+                        "Fig. 11 analogue: spectrograms of the first and last run.")
+    return page.write(path)

@@ -1,0 +1,93 @@
+"""Runs: what identifies a simulation (spec), where finished ones live (store) and how they
+are executed (serial, local processes, Dask)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from .executor import BACKENDS, default_workers, run
+from .spec import RunResult, RunSpec, execute
+from .store import RunStore
+
+__all__ = ["BACKENDS", "RunCounts", "RunResult", "RunSpec", "RunStore", "Runner",
+           "default_workers", "execute"]
+
+
+@dataclass
+class RunCounts:
+    total: int = 0
+    new: int = 0
+    cached: int = 0
+    failed: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        return {"total": self.total, "new": self.new, "cached": self.cached,
+                "failed": self.failed}
+
+
+class Progress:
+    """Progress reporting interface (the CLI plugs in a rich progress bar)."""
+
+    def start(self, label: str, total: int, cached: int) -> None: ...
+
+    def advance(self, ok: bool) -> None: ...
+
+    def stop(self) -> None: ...
+
+
+@dataclass
+class Runner:
+    """Runs specs through the store: finished runs are loaded, missing ones computed and
+    saved as each finishes. ``counts`` accumulates over every call (one study)."""
+
+    store: RunStore
+    backend: str = "processes"
+    workers: int | None = None
+    scheduler: str | None = None
+    progress: Progress = field(default_factory=Progress)
+    retry_failed: bool = False
+    counts: RunCounts = field(default_factory=RunCounts)
+    _seen: set = field(default_factory=set)
+
+    def run(self, specs: Sequence[RunSpec], label: str = "runs",
+            on_result: Callable[[RunSpec, RunResult], None] | None = None) -> dict[str, str]:
+        """Make sure every spec has a stored result; returns key -> "ok" | "failed"."""
+        unique: dict[str, RunSpec] = {}
+        for s in specs:
+            unique.setdefault(s.key(), s)
+        todo, status = [], {}
+        for key, spec in unique.items():
+            rec = self.store.record(key)
+            if rec is not None and (rec["status"] == "ok" or not self.retry_failed):
+                status[key] = rec["status"]
+                if key not in self._seen:
+                    self.counts.cached += 1
+                    self.counts.failed += rec["status"] == "failed"
+            else:
+                todo.append(spec)
+        for key in unique:
+            if key not in self._seen:
+                self._seen.add(key)
+                self.counts.total += 1
+        self.progress.start(label, len(unique), len(unique) - len(todo))
+
+        def done(spec: RunSpec, result: RunResult) -> None:
+            self.store.save(spec, result)
+            status[result.key] = "ok" if result.ok else "failed"
+            self.counts.new += 1
+            self.counts.failed += not result.ok
+            self.progress.advance(result.ok)
+            if on_result is not None:
+                on_result(spec, result)
+
+        try:
+            if todo:
+                run(todo, done, backend=self.backend, workers=self.workers,
+                    scheduler=self.scheduler)
+        finally:
+            self.progress.stop()
+        return status
+
+    def load(self, key: str) -> RunResult | None:
+        return self.store.load(key)

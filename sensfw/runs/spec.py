@@ -1,0 +1,111 @@
+"""What identifies one simulation run, and how a worker executes it."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+import traceback
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import SensfwError, SimulationError
+from ..excitation import Chirp
+from ..models.base import Model, Signals, SolverSettings
+
+
+def _canonical(obj: Any) -> Any:
+    """JSON-stable form: floats by repr (exact), dict keys sorted, tuples as lists."""
+    if isinstance(obj, float):
+        if not math.isfinite(obj):
+            return str(obj)
+        return float(repr(obj)) if obj != 0 else 0.0
+    if isinstance(obj, Mapping):
+        return {str(k): _canonical(v) for k, v in sorted(obj.items(), key=lambda kv: str(kv[0]))}
+    if isinstance(obj, (list, tuple)):
+        return [_canonical(v) for v in obj]
+    if hasattr(obj, "item") and callable(obj.item):  # numpy scalar
+        return _canonical(obj.item())
+    return obj
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One simulation: model (name, version, options), full parameter values, excitation and
+    solver settings. Its :meth:`key` (a hash of all of these) names the run in the store, so
+    the same run is never computed twice."""
+
+    model: str
+    model_version: str
+    params: Mapping[str, float]
+    excitation: Mapping[str, float]
+    solver: Mapping[str, Any]
+    model_options: Mapping[str, Any] = field(default_factory=dict)
+    timeout: float | None = None  # wall seconds; not part of the key
+
+    def identity(self) -> dict:
+        return _canonical({
+            "model": self.model, "model_version": self.model_version,
+            "model_options": dict(self.model_options), "params": dict(self.params),
+            "excitation": dict(self.excitation), "solver": dict(self.solver),
+        })
+
+    def key(self) -> str:
+        blob = json.dumps(self.identity(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(blob.encode()).hexdigest()[:24]
+
+    @classmethod
+    def create(cls, model: Model, params: Mapping[str, float], excitation: Chirp,
+               solver: SolverSettings, model_ref: Mapping[str, Any] | None = None) -> RunSpec:
+        """Spec for ``model``; ``model_ref`` (registry name + constructor options) is what a
+        worker uses to rebuild the model."""
+        ref = dict(model_ref or {"name": model.name, "options": {}})
+        return cls(model=ref["name"], model_version=str(model.version),
+                   params={k: float(v) for k, v in params.items()},
+                   excitation=excitation.to_dict(), solver=solver.to_dict(),
+                   model_options=_canonical({**ref.get("options", {}),
+                                             "_declared": model.options()}),
+                   timeout=solver.timeout)
+
+
+@dataclass
+class RunResult:
+    """Outcome of one run: signals, or the reason it failed."""
+
+    key: str
+    ok: bool
+    signals: Signals | None = None
+    error: str | None = None
+    wall: float = 0.0
+    cached: bool = False
+
+
+def build_model(spec: RunSpec) -> Model:
+    from ..plugins import models
+
+    options = {k: v for k, v in spec.model_options.items() if not k.startswith("_")}
+    return models.get(spec.model)(**options)
+
+
+def execute(spec: RunSpec) -> RunResult:
+    """Run one simulation (in a worker). Never raises: a failure becomes a failed result."""
+    t0 = time.perf_counter()
+    key = spec.key()
+    try:
+        model = build_model(spec)
+        exc = Chirp(**spec.excitation)
+        solver = SolverSettings(**{k: v for k, v in spec.solver.items()
+                                   if k in SolverSettings.__dataclass_fields__})
+        signals = model.simulate(dict(spec.params), exc, solver)
+        return RunResult(key, True, signals=signals, wall=time.perf_counter() - t0)
+    except SimulationError as err:
+        return RunResult(key, False, error=str(err), wall=time.perf_counter() - t0)
+    except SensfwError as err:
+        return RunResult(key, False, error=f"{type(err).__name__}: {err}",
+                         wall=time.perf_counter() - t0)
+    except Exception as err:  # a model bug must not lose the study
+        tb = traceback.format_exc(limit=3)
+        return RunResult(key, False, error=f"{type(err).__name__}: {err}\n{tb}",
+                         wall=time.perf_counter() - t0)

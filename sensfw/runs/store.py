@@ -1,0 +1,107 @@
+"""The run store: one folder, one entry per run key; the single source of truth of a study.
+
+An entry is ``<key>.json`` (status, parameters, wall time, error, the SHA-256 of the signal
+file) plus, for a finished run, ``<key>.npz`` (the signals). Both are written to a temporary
+file in the same folder and renamed into place (atomic on POSIX), the signal file first; the
+JSON is the commit record. A run is complete only when its JSON exists and the checksum in it
+matches the signal file; anything else (killed writer, truncated or corrupted file) reads as
+absent and is recomputed. Two writers of the same key write identical content, so concurrent
+workers cannot corrupt an entry.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..models.base import Signals
+from .spec import RunResult, RunSpec
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+class RunStore:
+    """Run entries in ``folder`` (created on first write)."""
+
+    def __init__(self, folder: str | os.PathLike):
+        self.folder = Path(folder)
+
+    def _paths(self, key: str) -> tuple[Path, Path]:
+        return self.folder / f"{key}.json", self.folder / f"{key}.npz"
+
+    def record(self, key: str) -> dict | None:
+        """The committed record of ``key``, or None if absent or not intact."""
+        meta_path, data_path = self._paths(key)
+        try:
+            meta = json.loads(meta_path.read_text())
+        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+            return None
+        if meta.get("status") == "ok":
+            try:
+                digest = hashlib.sha256(data_path.read_bytes()).hexdigest()
+            except FileNotFoundError:
+                return None
+            if digest != meta.get("sha256"):
+                return None
+        elif meta.get("status") != "failed":
+            return None
+        return meta
+
+    def has(self, key: str, include_failed: bool = True) -> bool:
+        meta = self.record(key)
+        return meta is not None and (include_failed or meta["status"] == "ok")
+
+    def load(self, key: str) -> RunResult | None:
+        """The stored result of ``key`` (signals loaded), or None if absent/corrupt."""
+        meta = self.record(key)
+        if meta is None:
+            return None
+        if meta["status"] == "failed":
+            return RunResult(key, False, error=meta.get("error"), wall=meta.get("wall", 0.0),
+                             cached=True)
+        _, data_path = self._paths(key)
+        with np.load(data_path, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+        return RunResult(key, True, signals=Signals.from_arrays(arrays),
+                         wall=meta.get("wall", 0.0), cached=True)
+
+    def save(self, spec: RunSpec, result: RunResult) -> None:
+        """Commit ``result`` of ``spec`` (signal file first, then the JSON record)."""
+        self.folder.mkdir(parents=True, exist_ok=True)
+        meta_path, data_path = self._paths(result.key)
+        meta = {"key": result.key, "status": "ok" if result.ok else "failed",
+                "wall": round(float(result.wall), 6), "spec": spec.identity()}
+        if result.ok:
+            buf = io.BytesIO()
+            np.savez(buf, **result.signals.to_arrays())
+            data = buf.getvalue()
+            _atomic_write(data_path, data)
+            meta["sha256"] = hashlib.sha256(data).hexdigest()
+        else:
+            meta["error"] = result.error
+        _atomic_write(meta_path, json.dumps(meta, indent=1, sort_keys=True).encode())
+
+    def keys(self) -> list[str]:
+        if not self.folder.exists():
+            return []
+        return sorted(p.stem for p in self.folder.glob("*.json"))
