@@ -67,7 +67,7 @@ class SolverSettings:
     """Time integration settings that enter the run hash."""
 
     method: str = "RK44"
-    step: float = 5e-6
+    step: float = 1e-5
     timeout: float | None = None  # wall seconds per run; None = no limit
 
     def to_dict(self) -> dict:

@@ -1,0 +1,60 @@
+"""Executors: results stream back one by one; hangs, crashes and failures become failed runs
+without losing the others."""
+
+import time
+
+import pytest
+
+from sensfw.excitation import Chirp
+from sensfw.models.base import SolverSettings
+from sensfw.plugins import models
+from sensfw.runs import Runner, RunSpec, RunStore
+from sensfw.runs.executor import run_processes
+
+EX = Chirp(50, 500, 0.05, 4000, 1.0)
+FAULTS = {"model": "ishigami", "crash": {"parameter": "x1", "above": 2.5},
+          "hang": {"parameter": "x2", "above": 2.5}, "hang_seconds": 60.0,
+          "diverge": {"parameter": "x3", "above": 2.5}}
+
+
+def specs(points, timeout=None):
+    m = models.get("fault_injection")(**FAULTS)
+    ref = {"name": "fault_injection", "options": FAULTS}
+    return [RunSpec.create(m, m.parameters().complete(p), EX, SolverSettings(timeout=timeout),
+                           ref) for p in points]
+
+
+def test_process_pool_survives_crash_hang_and_divergence():
+    points = [{"x1": 0.1}, {"x1": 3.0}, {"x2": 3.0}, {"x3": 3.0}, {"x1": -1.0}, {"x2": 1.0}]
+    got = {}
+    t0 = time.monotonic()
+    run_processes(specs(points, timeout=8.0), lambda s, r: got.__setitem__(s.key(), r),
+                  workers=2)
+    assert time.monotonic() - t0 < 40  # the hang was cut at its 8 s timeout
+    results = [got[s.key()] for s in specs(points)]
+    assert [r.ok for r in results] == [True, False, False, False, True, True]
+    assert "died" in results[1].error
+    assert "timeout" in results[2].error
+    assert "diverged" in results[3].error
+
+
+def test_runner_caches_and_counts(tmp_path):
+    store = RunStore(tmp_path)
+    points = [{"x1": v} for v in (-1.0, 0.0, 1.0)] + [{"x3": 3.0}]
+    r1 = Runner(store, backend="serial")
+    status = r1.run(specs(points))
+    assert sorted(status.values()) == ["failed", "ok", "ok", "ok"]
+    assert r1.counts.as_dict() == {"total": 4, "new": 4, "cached": 0, "failed": 1}
+    r2 = Runner(store, backend="serial")
+    r2.run(specs(points))
+    assert r2.counts.as_dict() == {"total": 4, "new": 0, "cached": 4, "failed": 1}
+    r3 = Runner(store, backend="serial", retry_failed=True)
+    r3.run(specs(points))
+    assert r3.counts.new == 1 and r3.counts.cached == 3
+
+
+def test_unknown_backend_is_a_clear_error(tmp_path):
+    from sensfw.errors import SensfwError
+
+    with pytest.raises(SensfwError, match=r"unknown execution backend 'gpu'.*serial"):
+        Runner(RunStore(tmp_path), backend="gpu").run(specs([{"x1": 0.0}, {"x1": 1.0}]))

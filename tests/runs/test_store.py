@@ -1,0 +1,84 @@
+"""The run store: atomic, checksummed entries; anything not intact reads as absent."""
+
+import json
+
+import numpy as np
+import pytest
+
+from sensfw.excitation import Chirp
+from sensfw.models.base import SolverSettings
+from sensfw.plugins import models
+from sensfw.runs import RunSpec, RunStore, execute
+
+EX = Chirp(50, 500, 0.05, 4000, 1.0)
+
+
+def spec(**params):
+    m = models.get("two_dof")()
+    return RunSpec.create(m, m.parameters().complete(params), EX, SolverSettings())
+
+
+def test_key_depends_on_everything_that_changes_results():
+    base = spec()
+    assert base.key() == spec().key()
+    assert spec(k1=5000.0).key() != base.key()
+    other_ex = RunSpec.create(models.get("two_dof")(), dict(base.params),
+                              Chirp(50, 500, 0.05, 4000, 2.0), SolverSettings())
+    assert other_ex.key() != base.key()
+    other_solver = RunSpec.create(models.get("two_dof")(), dict(base.params), EX,
+                                  SolverSettings(step=2e-6))
+    assert other_solver.key() != base.key()
+    # the timeout is not part of the result, so not part of the key
+    timed = RunSpec.create(models.get("two_dof")(), dict(base.params), EX,
+                           SolverSettings(timeout=10.0))
+    assert timed.key() == base.key()
+
+
+def test_roundtrip_is_bitwise(tmp_path):
+    store = RunStore(tmp_path)
+    s = spec()
+    res = execute(s)
+    store.save(s, res)
+    back = store.load(s.key())
+    assert back.ok and back.cached
+    for ch, x in res.signals.channels.items():
+        assert np.array_equal(back.signals.channels[ch], x)
+    assert np.array_equal(back.signals.force, res.signals.force)
+    assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_corrupt_or_half_written_entries_read_as_absent(tmp_path):
+    store = RunStore(tmp_path)
+    s = spec()
+    store.save(s, execute(s))
+    data = tmp_path / f"{s.key()}.npz"
+    blob = data.read_bytes()
+    data.write_bytes(blob[: len(blob) // 2])  # truncated signal file
+    assert store.load(s.key()) is None
+    data.write_bytes(blob)
+    assert store.load(s.key()) is not None
+    (tmp_path / f"{s.key()}.json").write_text('{"status": "ok", "sha2')  # torn record
+    assert store.load(s.key()) is None
+    (tmp_path / f"{s.key()}.json").unlink()  # killed before the commit record
+    assert store.load(s.key()) is None and not store.has(s.key())
+
+
+def test_failed_runs_are_recorded_with_their_reason(tmp_path):
+    store = RunStore(tmp_path)
+    m = models.get("fault_injection")(model="two_dof", diverge={"parameter": "k1",
+                                                                 "above": 4500.0})
+    s = RunSpec.create(m, m.parameters().complete({"k1": 6000.0}), EX, SolverSettings(),
+                       {"name": "fault_injection", "options": {
+                           "model": "two_dof", "diverge": {"parameter": "k1", "above": 4500.0}}})
+    res = execute(s)
+    assert not res.ok and "diverged" in res.error and "k1=6000" in res.error
+    store.save(s, res)
+    meta = json.loads((tmp_path / f"{s.key()}.json").read_text())
+    assert meta["status"] == "failed" and "diverged" in meta["error"]
+    assert store.load(s.key()).ok is False
+
+
+@pytest.mark.parametrize("bad", ["", "{}", '{"status": "weird"}'])
+def test_garbage_records_are_ignored(tmp_path, bad):
+    (tmp_path / "abc.json").write_text(bad)
+    assert RunStore(tmp_path).record("abc") is None

@@ -1,0 +1,98 @@
+"""Study files: every problem reported at once with its dotted path; exit code 2, no
+traceback."""
+
+import copy
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from sensfw.errors import StudyError
+from sensfw.study import Study, to_unit
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK = tomllib.loads((ROOT / "studies" / "quick.toml").read_text())
+
+
+def problems(data) -> dict[str, str]:
+    with pytest.raises(StudyError) as info:
+        Study.from_dict(data, "x.toml")
+    return dict(info.value.problems)
+
+
+def test_shipped_studies_are_valid():
+    for name in ("quick", "paper"):
+        study = Study.load(ROOT / "studies" / f"{name}.toml")
+        assert study.parameters is not None
+    paper = Study.load(ROOT / "studies" / "paper.toml")
+    assert len(paper.variable_names()) == 19  # Table 1: 21 parameters, two pairs grouped
+    assert paper.parameters["clutch_drive_stiffness"].nominal == pytest.approx(3.14e6)
+    assert paper.excitation.f1 == 5000 and paper.excitation.fs == 20000
+
+
+def test_units_are_converted_and_checked():
+    assert to_unit("7.05e8 N/m", "N/mm") == pytest.approx(7.05e5)
+    assert to_unit("0.234 N*s/m", "N*s/mm") == pytest.approx(2.34e-4)
+    assert to_unit("5 kHz", "Hz") == 5000
+    assert to_unit(3, "mm") == 3.0
+    with pytest.raises(ValueError, match="cannot convert '3 kg' to N/mm"):
+        to_unit("3 kg", "N/mm")
+
+
+def test_all_problems_reported_at_once_with_dotted_paths():
+    data = copy.deepcopy(QUICK)
+    data["parameters"] = {
+        "clutch_drive_damping": {"min": "600 N*s/mm", "max": "514.6 N*s/mm"},  # min > max
+        "slide_stiffness": {"max": "3 kg"},  # wrong unit
+        "bearing_preload": {"nominal": "500 N"},  # nominal outside bounds
+        "no_such_parameter": {"max": 1.0},
+    }
+    data["excitation"]["colour"] = "red"  # unknown key
+    data["stages"][0]["design"] = "oatt"  # unknown plugin
+    data["stages"][1]["surrogates"] = ["eq19"]
+    got = problems(data)
+    assert "below min" in got["parameters.clutch_drive_damping.max"]
+    assert "cannot convert '3 kg' to N/mm" in got["parameters.slide_stiffness.max"]
+    assert "outside" in got["parameters.bearing_preload.nominal"]
+    assert "unknown parameter" in got["parameters.no_such_parameter"]
+    assert "Extra inputs are not permitted" in got["excitation.colour"]
+    assert "unknown design 'oatt'; available:" in got["stages[0].design"]
+    assert "oat" in got["stages[0].design"]
+    assert "unknown surrogate 'eq19'; available:" in got["stages[1].surrogates[0]"]
+
+
+def test_stage_references_and_channels_are_checked():
+    data = copy.deepcopy(QUICK)
+    data["stages"][1]["variables"] = "selected:sreen"
+    data["stages"][0]["scorers"][0]["channel"] = "crank_axail"
+    data["model"]["output"] = "nope"
+    data["stages"][0]["variables"] = ["slide_damping", "slide_dampin"]
+    got = problems(data)
+    assert "no earlier stage named 'sreen'" in got["stages[1].variables"]
+    assert "unknown channel 'crank_axail'" in got["stages[0].scorers[0].channel"]
+    assert "unknown channel 'nope'" in got["model.output"]
+    assert "unknown design variable 'slide_dampin'" in got["stages[0].variables"]
+
+
+def test_missing_sections_and_bad_toml(tmp_path):
+    got = problems({"stages": []})
+    assert "study" in got and "stages" in got
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[study\nname='x'")
+    with pytest.raises(StudyError, match="not valid TOML"):
+        Study.load(bad)
+    with pytest.raises(StudyError, match="file not found"):
+        Study.load(tmp_path / "missing.toml")
+
+
+def test_cli_reports_errors_with_exit_code_2_and_no_traceback(tmp_path):
+    bad = tmp_path / "bad.toml"
+    text = (ROOT / "studies" / "quick.toml").read_text()
+    bad.write_text(text + '\n[parameters.clutch_drive_damping]\nmax = "0.5 N*s/mm"\n')
+    proc = subprocess.run([sys.executable, "-m", "sensfw", "run", str(bad), "--out",
+                           str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert "parameters.clutch_drive_damping" in proc.stderr
+    assert "Traceback" not in proc.stderr + proc.stdout
