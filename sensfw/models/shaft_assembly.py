@@ -133,11 +133,40 @@ class Geometry:
     dmax: float = 0.01  # mm, penetration at which contact damping is fully active
 
 
-#: Coordinates per body: planar rigid bodies (x, y, theta), the clutch is a point mass (x, y).
-BODIES = {"D": 3, "C": 3, "K": 2}
-OFFSETS = {"D": 0, "C": 3, "K": 6}
-N_COORDS = 8
 HOUSING = "H"  # ground
+
+
+@dataclass(frozen=True)
+class Body:
+    """A body of the assembly: planar rigid body (3 coordinates x, y, theta) or point mass
+    (2 coordinates x, y); ``ref`` is its reference position (m)."""
+
+    name: str
+    ndof: int
+    mass: float
+    inertia: float = 0.0
+    ref: tuple[float, float] = (0.0, 0.0)
+
+
+class Layout:
+    """Coordinate layout of a list of bodies: ``offset[name]`` is the index of its x."""
+
+    def __init__(self, bodies: list[Body]):
+        self.bodies = {b.name: b for b in bodies}
+        self.offset, n = {}, 0
+        for b in bodies:
+            self.offset[b.name] = n
+            n += b.ndof
+        self.n = n
+
+    def masses(self) -> np.ndarray:
+        out = []
+        for b in self.bodies.values():
+            out += [b.mass, b.mass] + ([b.inertia] if b.ndof == 3 else [])
+        return np.array(out)
+
+    def y_index(self) -> list[int]:
+        return [self.offset[b] + 1 for b in self.bodies]
 
 
 @dataclass(frozen=True)
@@ -162,16 +191,16 @@ class State:
     """Small-rotation kinematics of body points and assembly of generalised forces, for the
     numpy evaluation of the model (static equilibrium, linearisation, tests)."""
 
-    def __init__(self, q, qd):
-        self.q, self.qd = q, qd
-        self.f = np.zeros(N_COORDS)
+    def __init__(self, layout: Layout, q, qd):
+        self.layout, self.q, self.qd = layout, q, qd
+        self.f = np.zeros(layout.n)
 
     def point(self, body: str, r: tuple[float, float]):
         """Displacement and velocity (ux, uy, vx, vy) of the body point at ``r``."""
         if body == HOUSING:
             return 0.0, 0.0, 0.0, 0.0
-        i, q, qd = OFFSETS[body], self.q, self.qd
-        if BODIES[body] == 2:
+        i, q, qd = self.layout.offset[body], self.q, self.qd
+        if self.layout.bodies[body].ndof == 2:
             return q[i], q[i + 1], qd[i], qd[i + 1]
         th, thd = q[i + 2], qd[i + 2]
         return q[i] - th * r[1], q[i + 1] + th * r[0], qd[i] - thd * r[1], qd[i + 1] + thd * r[0]
@@ -179,10 +208,10 @@ class State:
     def apply(self, body: str, r: tuple[float, float], fx: float, fy: float) -> None:
         if body == HOUSING:
             return
-        i = OFFSETS[body]
+        i = self.layout.offset[body]
         self.f[i] += fx
         self.f[i + 1] += fy
-        if BODIES[body] == 3:
+        if self.layout.bodies[body].ndof == 3:
             self.f[i + 2] += r[0] * fy - r[1] * fx
 
 
@@ -205,9 +234,11 @@ class ShaftAssembly(Model):
 
     def __init__(self, linearised: bool = False, geometry: Geometry | None = None,
                  effects: tuple = ()):
+        from .effects import make_effect
+
         self.linearised = bool(linearised)
         self.geometry = geometry or Geometry()
-        self.effects = tuple(effects)
+        self.effects = tuple(make_effect(e) for e in effects)
 
     # ---- declarations ------------------------------------------------------------------------
     def parameters(self) -> ParameterSet:
@@ -223,11 +254,22 @@ class ShaftAssembly(Model):
             opts["effects"] = [e.spec() for e in self.effects]
         return opts
 
-    def masses(self) -> np.ndarray:
-        """Diagonal of the constant mass matrix for q = [xD, yD, thD, xC, yC, thC, xK, yK]."""
+    def bodies(self, p: Mapping[str, float] | None = None) -> list[Body]:
+        """Driveshaft D, crankshaft C (with the shaker armature), clutch K, plus the bodies of
+        the effects (``p`` gives effect parameter values where they change masses)."""
         g = self.geometry
-        return np.array([g.m_drive, g.m_drive, g.j_drive, g.m_crank, g.m_crank, g.j_crank,
-                         g.m_clutch, g.m_clutch])
+        out = [Body("D", 3, g.m_drive, g.j_drive), Body("C", 3, g.m_crank, g.j_crank),
+               Body("K", 2, g.m_clutch, 0.0, (g.x_clutch, 0.0))]
+        for e in self.effects:
+            out = e.bodies(self, p or {}, out)
+        return out
+
+    def layout(self, p: Mapping[str, float] | None = None) -> Layout:
+        return Layout(self.bodies(p))
+
+    def masses(self, p: Mapping[str, float] | None = None) -> np.ndarray:
+        """Diagonal of the constant mass matrix (q = [xD, yD, thD, xC, yC, thC, xK, yK, ...])."""
+        return self.layout(p).masses()
 
     # ---- physics -----------------------------------------------------------------------------
     def laws(self, p: Mapping[str, float]) -> dict[str, ContactLaw]:
@@ -238,9 +280,18 @@ class ShaftAssembly(Model):
         def law(k, b, c):
             return ContactLaw(k=stiffness_si(k, b), b=b, c=c * 1e3, dmax=dmax)
 
+        # effect contact_hardening: another exponent, coefficient rescaled so that the force
+        # at the reference penetration is unchanged
+        kb, bb = g.bearing_radial_k, g.bearing_radial_b
+        if "hardening_exponent" in p:
+            from .effects import ContactHardening
+
+            b_new = p["hardening_exponent"]
+            kb = kb * ContactHardening.reference_penetration ** (bb - b_new)
+            bb = b_new
         return {
-            "bearing_l1": law(g.bearing_radial_k, g.bearing_radial_b, p["l1_damping"]),
-            "bearing_l3": law(g.bearing_radial_k, g.bearing_radial_b, p["l3_damping"]),
+            "bearing_l1": law(kb, bb, p["l1_damping"]),
+            "bearing_l3": law(kb, bb, p["l3_damping"]),
             "bearing_axial": law(g.bearing_axial_k, g.bearing_axial_b, p["l3_damping"]),
             "slide": law(p["slide_stiffness"], p["slide_exponent"], p["slide_damping"]),
             "clutch_drive": law(p["clutch_drive_stiffness"], p["clutch_drive_exponent"],
@@ -285,11 +336,18 @@ class ShaftAssembly(Model):
                 return fx, fy
             return law
 
+        play = p.get("clearance_gap", 0.0) * MM  # effect clearance (no play by default)
+        mu_k = p.get("friction_mu", 0.0)  # effect friction (none by default)
+        v_k = p.get("friction_velocity", 1.0) * MM
+
         def clutch_drive(ops, u, v, contact):
-            # K relative to D: radial guidance without play; the clutch spring seated on D
-            fy = contact.two_sided("clutch_drive", "clutch_drive", u[1], v[1], 0.0)
+            # K relative to D: radial guidance; the clutch spring seated on D
+            fy = contact.two_sided("clutch_drive", "clutch_drive", u[1], v[1], play)
             fx = p["spring_stiffness"] * 1e3 * (g.spring_precompression * MM - u[0]) \
                 - p["spring_damping"] * 1e3 * v[0]
+            if mu_k > 0 and not linear:
+                fx = fx - friction_coefficient(ops, v[0], mu_k, 0.6 * mu_k, 0.1 * v_k, v_k) \
+                    * ops.abs(fy)
             return fx, fy
 
         a = math.radians(g.ramp_angle_deg)
@@ -316,7 +374,7 @@ class ShaftAssembly(Model):
                  clutch_crank),
         ]
         for e in self.effects:
-            links.extend(e.links(self, p))
+            links = e.links(self, p, links)
         return links
 
     def shaker_force(self, ops, t, excitation: Chirp):
@@ -326,19 +384,20 @@ class ShaftAssembly(Model):
         return ops.where(t < excitation.duration, excitation.amplitude * ops.sin(phase), 0.0)
 
     def generalized_forces(self, q, qd, p: Mapping[str, float], contact=None) -> np.ndarray:
-        """Static and contact forces on q = [xD, yD, thD, xC, yC, thC, xK, yK] (numpy, SI, no
-        excitation). ``contact`` is the contact hook (default: the nonlinear laws)."""
+        """Static and contact forces on q = [xD, yD, thD, xC, yC, thC, xK, yK, ...] (numpy, SI,
+        no excitation). ``contact`` is the contact hook (default: the nonlinear laws)."""
         ops = numpy_ops()
         contact = contact or NonlinearContacts(ops, self.laws(p))
-        st = State(np.asarray(q, float), np.asarray(qd, float))
+        layout = self.layout(p)
+        st = State(layout, np.asarray(q, float), np.asarray(qd, float))
         for ln in self.links(p):
             ux0, uy0, vx0, vy0 = st.point(ln.body0, ln.r0)
             ux1, uy1, vx1, vy1 = st.point(ln.body1, ln.r1)
             fx, fy = ln.law(ops, (ux1 - ux0, uy1 - uy0), (vx1 - vx0, vy1 - vy0), contact)
             st.apply(ln.body1, ln.r1, fx, fy)
             st.apply(ln.body0, ln.r0, -fx, -fy)
-        m = self.masses()
-        st.f[[1, 4, 7]] -= m[[1, 4, 7]] * G
+        iy = layout.y_index()
+        st.f[iy] -= layout.masses()[iy] * G
         return st.f
 
     # ---- static equilibrium and linearisation ------------------------------------------------
@@ -347,8 +406,10 @@ class ShaftAssembly(Model):
         the same force laws, evaluated with numpy)."""
         from scipy.optimize import least_squares
 
-        zero = np.zeros(N_COORDS)
-        scale = np.array([1e-5, 1e-5, 1e-4, 1e-5, 1e-5, 1e-4, 1e-5, 1e-5])
+        layout = self.layout(p)
+        zero = np.zeros(layout.n)
+        scale = np.full(layout.n, 1e-5)
+        scale[[2, 5]] = 1e-4
 
         def res(z):
             return self.generalized_forces(z * scale, zero, p)
@@ -361,8 +422,11 @@ class ShaftAssembly(Model):
         th_d = (c1 - c3) / (g.x_l3 - g.x_l1)
         y_d = -c1 - th_d * g.x_l1
         x_d = (p["bearing_preload"] / g.bearing_axial_k) ** (1 / g.bearing_axial_b) * MM
-        guess = np.array([x_d, y_d, th_d, x_d, y_d - cs, th_d,
-                          x_d, y_d + th_d * g.x_clutch]) / scale
+        guess = np.zeros(layout.n)
+        guess[:8] = [x_d, y_d, th_d, x_d, y_d - cs, th_d, x_d, y_d + th_d * g.x_clutch]
+        for e in self.effects:
+            e.initial_guess(layout, guess)
+        guess /= scale
         best = None
         for method, z0 in (("trf", guess), ("lm", guess), ("dogbox", guess)):
             sol = least_squares(res, z0, method=method, xtol=1e-15, ftol=1e-15, gtol=1e-15,
@@ -383,7 +447,7 @@ class ShaftAssembly(Model):
         ``delta0``, carrying the static force, and the tangent damping of Eq. 2 there; contacts
         open at the static state stay absent (clearances closed, exponents 1, no friction)."""
         rec = RecordingContacts()
-        self.generalized_forces(q0, np.zeros(N_COORDS), p, rec)
+        self.generalized_forces(q0, np.zeros(len(q0)), p, rec)
         return LinearContacts(self.laws(p), rec.static)
 
     def linear_matrices(self, p: Mapping[str, float],
@@ -392,11 +456,10 @@ class ShaftAssembly(Model):
         the numpy forces; friction enters the damping through ``mu'(0)``)."""
         q0 = self.equilibrium(p) if q0 is None else q0
         contact = self.linear_contacts(p, q0) if self.linearised else None
-        K = np.zeros((N_COORDS, N_COORDS))
-        D = np.zeros((N_COORDS, N_COORDS))
-        z = np.zeros(N_COORDS)
-        for i in range(N_COORDS):
-            e = np.zeros(N_COORDS)
+        n = len(q0)
+        K, D, z = np.zeros((n, n)), np.zeros((n, n)), np.zeros(n)
+        for i in range(n):
+            e = np.zeros(n)
             e[i] = 1e-10 if i not in (2, 5) else 1e-9
             h = e[i]
             K[:, i] = -(self.generalized_forces(q0 + e, z, p, contact)
@@ -404,7 +467,7 @@ class ShaftAssembly(Model):
             ev = e * (1e-9 / h)
             D[:, i] = -(self.generalized_forces(q0, ev, p, contact)
                         - self.generalized_forces(q0, -ev, p, contact)) / 2e-9
-        return np.diag(self.masses()), K, D
+        return np.diag(self.masses(p)), K, D
 
     # ---- Exudyn ------------------------------------------------------------------------------
     def build(self, p: Mapping[str, float], excitation: Chirp | None,
@@ -423,28 +486,25 @@ class ShaftAssembly(Model):
         contact = self.linear_contacts(p, q0) if self.linearised else \
             NonlinearContacts(ops, self.laws(p))
         g = self.geometry
+        layout = self.layout(p)
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
-        ground = mbs.AddObject(ei.ObjectGround())
-        nodes = {
-            "D": mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[0, 0, 0],
-                                                initialCoordinates=list(q0[0:3]))),
-            "C": mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[0, 0, 0],
-                                                initialCoordinates=list(q0[3:6]))),
-            "K": mbs.AddNode(ei.NodePoint2D(referenceCoordinates=[g.x_clutch, 0],
-                                            initialCoordinates=list(q0[6:8]))),
-        }
-        bodies = {
-            HOUSING: ground,
-            "D": mbs.AddObject(ei.ObjectRigidBody2D(nodeNumber=nodes["D"], mass=g.m_drive,
-                                                    inertia=g.j_drive)),
-            "C": mbs.AddObject(ei.ObjectRigidBody2D(nodeNumber=nodes["C"], mass=g.m_crank,
-                                                    inertia=g.j_crank)),
-            "K": mbs.AddObject(ei.ObjectMassPoint2D(nodeNumber=nodes["K"],
-                                                    physicsMass=g.m_clutch)),
-        }
-        reference = {HOUSING: (0.0, 0.0), "D": (0.0, 0.0), "C": (0.0, 0.0),
-                     "K": (g.x_clutch, 0.0)}
+        bodies = {HOUSING: mbs.AddObject(ei.ObjectGround())}
+        reference = {HOUSING: (0.0, 0.0)}
+        for b in layout.bodies.values():
+            i = layout.offset[b.name]
+            q_init = list(q0[i:i + b.ndof])
+            if b.ndof == 3:
+                node = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[*b.ref, 0.0],
+                                                      initialCoordinates=q_init))
+                bodies[b.name] = mbs.AddObject(ei.ObjectRigidBody2D(
+                    nodeNumber=node, mass=b.mass, inertia=b.inertia))
+            else:
+                node = mbs.AddNode(ei.NodePoint2D(referenceCoordinates=list(b.ref),
+                                                  initialCoordinates=q_init))
+                bodies[b.name] = mbs.AddObject(ei.ObjectMassPoint2D(nodeNumber=node,
+                                                                    physicsMass=b.mass))
+            reference[b.name] = b.ref
 
         def marker(body, r):
             return mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=bodies[body],
@@ -462,7 +522,7 @@ class ShaftAssembly(Model):
 
             uf = _link_function(ln, off, ops, contact, user_functions)
             keep.append(_user_function(mbs, co, uf, "springForceUserFunction", user_functions))
-        for b in ("D", "C", "K"):
+        for b in layout.bodies:
             mb = mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=bodies[b]))
             mbs.AddLoad(ei.LoadMassProportional(markerNumber=mb, loadVector=[0, -G, 0]))
         if excitation is not None:

@@ -1,0 +1,146 @@
+"""The shipped Exudyn model (issue 3): resonances, physical nonlinearity, linear limit,
+time-step convergence, determinism, clear failures."""
+
+import numpy as np
+import pytest
+from scipy.signal import find_peaks
+
+from sensfw.errors import ParameterError, SimulationError
+from sensfw.excitation import Chirp
+from sensfw.models.base import SolverSettings
+from sensfw.models.shaft_assembly import GROUPS, PARAMETERS, ShaftAssembly
+from sensfw.signal import frf, thd
+
+NOMINAL = PARAMETERS.nominal()
+AMP_LOW, AMP_NOMINAL, AMP_HIGH = 0.05, 0.1, 0.2  # N; the study levels (studies/*.toml)
+
+
+def axial_frf(sig, nperseg=None):
+    f, H = frf(sig.force, sig.channels["crank_axial"], sig.fs, estimator="Hv",
+               nperseg=nperseg)
+    band = (f >= 50) & (f <= 5000)
+    return f[band], H[band]
+
+
+@pytest.fixture(scope="module")
+def nominal_1s():
+    return ShaftAssembly().simulate(NOMINAL, Chirp(50, 5000, 1.0, 20000, AMP_NOMINAL,
+                                                   tail=0.05))
+
+
+def test_parameters_are_table_1_plus_preload():
+    assert len(PARAMETERS) == 21
+    assert PARAMETERS["slide_stiffness"].unit == "N/mm"
+    assert (PARAMETERS["slide_damping"].min, PARAMETERS["slide_damping"].nominal,
+            PARAMETERS["slide_damping"].max) == (1.0, 234.0, 468.0)
+    assert PARAMETERS["clutch_crank_exponent"].nominal == 0.99
+    from sensfw.params import DesignSpace
+
+    assert len(DesignSpace.from_parameters(PARAMETERS, GROUPS)) == 19  # Sect. 3.1
+    with pytest.raises(ParameterError, match="slide_damping.*outside its bounds"):
+        ShaftAssembly().simulate({"slide_damping": 1000.0}, Chirp(50, 5000, 0.01, 20000))
+
+
+def test_nominal_run_has_three_resonances_in_band(nominal_1s):
+    sig = nominal_1s
+    for name, x in sig.channels.items():
+        assert np.all(np.isfinite(x)), name
+        assert np.std(x) > 0, name
+    f, H = axial_frf(sig, nperseg=2048)
+    db = 20 * np.log10(np.abs(H))
+    peaks, _ = find_peaks(db, prominence=6.0)
+    freqs = f[peaks]
+    distinct = [freqs[0]] if len(freqs) else []
+    for fr in freqs[1:]:
+        if fr > 1.1 * distinct[-1]:
+            distinct.append(fr)
+    assert len(distinct) >= 3, freqs
+
+
+def test_thd_grows_with_excitation_amplitude():
+    m = ShaftAssembly()
+    values = {}
+    for amp in (AMP_LOW, AMP_HIGH):
+        sig = m.simulate(NOMINAL, Chirp(50, 5000, 0.5, 20000, amp))
+        values[amp] = thd(sig.channels["crank_axial"], sig.fs, sig.f_inst)
+    assert values[AMP_HIGH] >= 2.0 * values[AMP_LOW], values
+
+
+def test_linearised_model_is_linear_and_matches_its_eigenfrequencies():
+    import exudyn as exu
+
+    lin = ShaftAssembly(linearised=True)
+    sig = lin.simulate(NOMINAL, Chirp(50, 5000, 1.0, 20000, AMP_NOMINAL, tail=0.3))
+    assert thd(sig.channels["crank_axial"], sig.fs, sig.f_inst) < 1.0
+    # eigenfrequencies of the linear mass and stiffness matrices, from Exudyn's linearisation
+    built = lin.build(NOMINAL, None)
+    M, K, _ = exu.solver.ComputeLinearizedSystem(built.mbs)
+    built.mbs.Reset()
+    built.SC.Reset()
+    w2 = np.linalg.eigvals(np.linalg.solve(M, K)).real
+    fn = np.sort(np.sqrt(w2[w2 > 0]) / (2 * np.pi))
+    fn = fn[(fn > 60) & (fn < 4800)]
+    # cross-check against the numpy model's own matrices
+    M2, K2, _ = lin.linear_matrices(NOMINAL)
+    w2b = np.linalg.eigvals(np.linalg.solve(M2, K2)).real
+    fnb = np.sort(np.sqrt(w2b[w2b > 0]) / (2 * np.pi))
+    fnb = fnb[(fnb > 60) & (fnb < 4800)]
+    np.testing.assert_allclose(fn, fnb, rtol=1e-4)
+    f, H = axial_frf(sig)
+    mag = np.abs(H)
+    matched = 0
+    for fr in fn:
+        win = (f > 0.97 * fr) & (f < 1.03 * fr)
+        fpk = f[win][np.argmax(mag[win])]
+        if abs(fpk / fr - 1) < 0.01:
+            matched += 1
+    assert len(fn) >= 3 and matched >= 3, (fn, matched)
+
+
+CORNERS = {
+    "nominal": NOMINAL,
+    "all-min": {k: p.min for k, p in PARAMETERS.items()},
+    "all-max": {k: p.max for k, p in PARAMETERS.items()},
+}
+
+
+@pytest.mark.parametrize("corner", list(CORNERS))
+def test_halving_the_time_step_changes_little(corner):
+    m = ShaftAssembly()
+    ex = Chirp(50, 5000, 0.3, 20000, AMP_NOMINAL, tail=0.05)
+    out = []
+    for h in (1e-5, 5e-6):
+        sig = m.simulate(CORNERS[corner], ex, SolverSettings(step=h))
+        f, H = axial_frf(sig, nperseg=1024)
+        out.append((20 * np.log10(np.abs(H)), thd(sig.channels["crank_axial"], sig.fs,
+                                                    sig.f_inst)))
+    rms_db = np.sqrt(np.mean((out[0][0] - out[1][0]) ** 2))
+    assert rms_db < 0.5, rms_db
+    assert abs(out[0][1] - out[1][1]) / out[1][1] < 0.05, (out[0][1], out[1][1])
+
+
+def test_deterministic_in_process_and_across_workers():
+    from sensfw.runs import RunSpec
+    from sensfw.runs.executor import run_processes
+
+    m = ShaftAssembly()
+    ex = Chirp(50, 5000, 0.05, 20000, AMP_NOMINAL)
+    a = m.simulate(NOMINAL, ex)
+    b = m.simulate(NOMINAL, ex)
+    spec = RunSpec.create(m, NOMINAL, ex, SolverSettings())
+    got = []
+    run_processes([spec], lambda s, r: got.append(r), workers=1)
+    c = got[0].signals
+    for ch in m.sensors:
+        assert np.array_equal(a.channels[ch], b.channels[ch])
+        assert np.array_equal(a.channels[ch], c.channels[ch])
+
+
+def test_divergence_is_one_clear_error_and_silent(capfd):
+    m = ShaftAssembly()
+    with pytest.raises(SimulationError) as info:
+        m.simulate(NOMINAL, Chirp(50, 5000, 0.05, 20000, 1.0), SolverSettings(step=5e-5))
+    msg = str(info.value)
+    assert "shaft_assembly simulation failed" in msg and "slide_damping=234" in msg
+    captured = capfd.readouterr()
+    assert captured.out == "" and captured.err == ""
