@@ -72,6 +72,8 @@ class Clearance(Effect):
     """Radial play of the clutch in the driveshaft bore (the base model has none): the clutch
     rattles once the excitation lifts it off its seat."""
 
+    name = "clearance"
+
     attach_points = ("clutch_drive",)
     signatures = ("harmonics (even and odd) that grow with excitation level",
                   "amplitude-dependent softening of the resonances it touches")
@@ -86,6 +88,8 @@ class Friction(Effect):
     """Axial stick-slip of the clutch in its bore, driven by the guidance normal force
     (dynamic coefficient 60 % of the static one, stiction transition at 10 % of the
     friction transition velocity)."""
+
+    name = "friction"
 
     attach_points = ("clutch_drive",)
     signatures = ("odd harmonics", "amplitude-dependent damping: peaks flatten and widen "
@@ -105,6 +109,8 @@ class ContactHardening(Effect):
     penetration of 0.1 um is unchanged, so the exponent changes the curvature of the law,
     not its level."""
 
+    name = "contact_hardening"
+
     attach_points = ("bearings",)
     signatures = ("harmonics that grow with excitation level",
                   "resonances of the bearing modes shift up with level")
@@ -120,6 +126,8 @@ class ContactHardening(Effect):
 class Preload(Effect):
     """An extra axial force pushing the crankshaft onto its bushing flange (a seal or a
     pedal-side spring): stiffens the axial contact path."""
+
+    name = "preload"
 
     attach_points = ("crankshaft",)
     signatures = ("axial resonances shift up", "harmonic content falls")
@@ -143,6 +151,8 @@ class Preload(Effect):
 class Damping(Effect):
     """Viscous damping between the driveshaft and the housing (joint or structural damping
     the penalty contacts do not give)."""
+
+    name = "damping"
 
     attach_points = ("driveshaft",)
     signatures = ("lower and wider peaks", "no new harmonics", "no frequency shift")
@@ -170,6 +180,8 @@ class AddedMass(Effect):
     shaker point from the centre of mass; the small shift of the centre of mass is
     neglected)."""
 
+    name = "added_mass"
+
     attach_points = ("crankshaft",)
     signatures = ("every crankshaft resonance shifts down", "no new harmonics")
 
@@ -189,6 +201,8 @@ class FlexibleMode(Effect):
     """An elastic mode the rigid model lacks (the paper's Fig. 12a): a modal mass on the
     crankshaft end, coupled radially and axially by a spring-damper tuned to the mode's
     frequency and modal damping ratio."""
+
+    name = "flexible_mode"
 
     attach_points = ("crankshaft",)
     signatures = ("a new resonance peak", "no new harmonics")
