@@ -1,0 +1,1 @@
+"""Measurements: load, check, align, compare with the model, diagnose missing physics."""

@@ -1,0 +1,219 @@
+"""Measured signals: loading (CSV with units, UFF58) and writing (synthetic measurements).
+
+CSV: a header row with ``time``, the excitation ``force`` and one column per sensor channel;
+units either in the header (``force [N]``, ``crank_axial [m/s^2]``, ``[g]`` meaning standard
+gravity) or in a sidecar ``<file>.toml``/``<file>.json`` with ``[units]`` (column -> unit) and
+optionally ``fs`` and ``level`` (excitation amplitude, N). UFF58: one record per channel
+(pyuff); the record's ``id1`` (or response-entity name) names the channel, ``force`` (or a
+record whose response direction/entity says force) is the excitation.
+
+Loaded values are converted to SI (N, m/s^2, s). Problems raise
+:class:`~sensfw.errors.MeasurementError` naming the file and the channel.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeasurementError
+from ..models.base import Signals
+
+TARGET_UNITS = {"time": "s", "force": "N"}
+ACCEL_UNIT = "m/s^2"
+_HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
+
+
+@dataclass
+class Measurement:
+    """Signals read from one file, with where they came from."""
+
+    file: str
+    signals: Signals
+    units: dict[str, str] = field(default_factory=dict)
+    level: float | None = None  # excitation amplitude (N) if known
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def fs(self) -> float:
+        return self.signals.fs
+
+
+def _factor(file: str, column: str, unit: str | None, target: str) -> float:
+    """Multiplier from ``unit`` to ``target`` (``g`` is standard gravity)."""
+    if not unit:
+        return 1.0
+    u = unit.strip()
+    if u.lower() in ("g", "gn", "g0", "g_n"):
+        u = "standard_gravity"
+    from ..study import units
+
+    try:
+        return float(units().Quantity(1.0, u).to(target).magnitude)
+    except Exception as err:
+        raise MeasurementError(file, f"unit {unit!r} cannot be converted to {target}: {err}",
+                               column) from None
+
+
+def _sidecar(path: Path) -> dict:
+    for ext, reader in ((".toml", tomllib.loads), (".json", json.loads)):
+        side = path.with_suffix(ext) if path.suffix != ext else None
+        side2 = Path(str(path) + ext)
+        for candidate in (side, side2):
+            if candidate is not None and candidate.exists():
+                try:
+                    return reader(candidate.read_text())
+                except Exception as err:
+                    raise MeasurementError(str(candidate), f"unreadable sidecar: {err}") \
+                        from None
+    return {}
+
+
+def _target(column: str) -> str:
+    return TARGET_UNITS.get(column, ACCEL_UNIT)
+
+
+def read_csv(path: str | Path) -> Measurement:
+    path = Path(path)
+    file = str(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise MeasurementError(file, "file not found") from None
+    except UnicodeDecodeError:
+        raise MeasurementError(file, "not a text (CSV) file") from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(lines) < 3:
+        raise MeasurementError(file, "needs a header row and at least two data rows")
+    delim = ";" if lines[0].count(";") > lines[0].count(",") else ","
+    header = [h.strip() for h in lines[0].split(delim)]
+    names, header_units = [], {}
+    for h in header:
+        m = _HEADER.match(h)
+        if not m:
+            raise MeasurementError(file, f"cannot read column header {h!r}")
+        names.append(m.group(1).strip())
+        if m.group(2):
+            header_units[m.group(1).strip()] = m.group(2).strip()
+    if len(set(names)) != len(names):
+        raise MeasurementError(file, f"duplicate column names in header {names}")
+    try:
+        data = np.genfromtxt(lines[1:], delimiter=delim, dtype=float)
+    except ValueError as err:
+        raise MeasurementError(file, f"malformed data rows: {err}") from None
+    data = np.atleast_2d(data)
+    if data.shape[1] != len(names):
+        raise MeasurementError(file, f"{data.shape[1]} data columns but {len(names)} headers")
+    side = _sidecar(path)
+    unit_map = {**header_units, **side.get("units", {})}
+    columns = {}
+    for i, name in enumerate(names):
+        columns[name] = data[:, i] * _factor(file, name, unit_map.get(name), _target(name))
+    return _assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
+
+
+def _assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_declared,
+              level) -> Measurement:
+    if "time" not in columns:
+        raise MeasurementError(file, "no 'time' column", "time")
+    if "force" not in columns:
+        raise MeasurementError(file, "no 'force' column (the excitation force)", "force")
+    for name, x in columns.items():
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise MeasurementError(file, f"{int(bad.sum())} NaN/inf value(s), first in data "
+                                         f"row {i + 1}", name)
+    t = columns["time"]
+    dt = np.diff(t)
+    if len(dt) == 0 or np.any(dt <= 0):
+        raise MeasurementError(file, "time is not strictly increasing", "time")
+    step = float(np.median(dt))
+    if np.max(np.abs(dt - step)) > 1e-3 * step:
+        worst = int(np.argmax(np.abs(dt - step)))
+        raise MeasurementError(file, f"non-uniform sampling: step {dt[worst]:.6g} s at row "
+                                     f"{worst + 2} vs {step:.6g} s elsewhere", "time")
+    fs = 1.0 / step
+    if fs_declared is not None and abs(fs - float(fs_declared)) > 1e-3 * float(fs_declared):
+        raise MeasurementError(file, f"sample rate from the time column is {fs:.6g} Hz but the "
+                                     f"sidecar declares fs = {fs_declared} Hz", "time")
+    channels = {k: v for k, v in columns.items() if k not in ("time", "force")}
+    sig = Signals(t=t - t[0], force=columns["force"], channels=channels, fs=fs,
+                  units={k: _target(k) for k in ("force", *channels)})
+    return Measurement(file=file, signals=sig, units=dict(unit_map),
+                       level=None if level is None else float(level))
+
+
+def read_uff(path: str | Path) -> Measurement:
+    import pyuff
+
+    path = Path(path)
+    file = str(path)
+    if not path.exists():
+        raise MeasurementError(file, "file not found")
+    try:
+        uff = pyuff.UFF(file)
+        sets = uff.read_sets()
+    except Exception as err:
+        raise MeasurementError(file, f"not a readable UFF file: {err}") from None
+    if isinstance(sets, dict):
+        sets = [sets]
+    records = [s for s in sets if s.get("type") == 58]
+    if not records:
+        raise MeasurementError(file, "no UFF58 (function at nodal DOF) records")
+    columns, unit_map, t = {}, {}, None
+    for rec in records:
+        name = str(rec.get("id1") or rec.get("rsp_ent_name") or "").strip()
+        if not name:
+            raise MeasurementError(file, "a UFF58 record has no name (id1)")
+        x = np.asarray(rec["x"], float)
+        y = np.asarray(rec["data"], float)
+        if np.iscomplexobj(rec["data"]):
+            raise MeasurementError(file, "complex (spectral) record; expected a time series",
+                                   name)
+        unit = str(rec.get("ordinate_axis_units_lab") or "").strip() or None
+        key = "force" if name.lower() in ("force", "excitation", "input") else name
+        columns[key] = y * _factor(file, key, unit, _target(key))
+        unit_map[key] = unit or _target(key)
+        if t is None:
+            t = x
+        elif len(x) != len(t) or np.max(np.abs(x - t)) > 1e-9 * max(1.0, abs(t[-1])):
+            raise MeasurementError(file, "time axis differs from the first record", key)
+    columns["time"] = t
+    side = _sidecar(path)
+    return _assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
+
+
+def load(path: str | Path) -> Measurement:
+    """A measurement file, by extension: ``.csv``/``.txt`` or ``.uff``/``.unv``."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext in (".uff", ".unv"):
+        return read_uff(path)
+    if ext in (".csv", ".txt", ".dat"):
+        return read_csv(path)
+    raise MeasurementError(str(path), f"unknown file type {ext!r}; use .csv or .uff")
+
+
+def write_csv(path: str | Path, signals: Signals, level: float | None = None,
+              meta: dict | None = None) -> Path:
+    """Write signals as a measurement CSV with units in the header (+ a TOML sidecar with the
+    sample rate, level and any ``meta``)."""
+    path = Path(path)
+    cols = ["time [s]", "force [N]", *[f"{k} [m/s^2]" for k in signals.channels]]
+    data = np.column_stack([signals.t, signals.force, *signals.channels.values()])
+    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+    side = {"fs": float(signals.fs)}
+    if level is not None:
+        side["level"] = float(level)
+    lines = [f"fs = {side['fs']!r}"] + ([f"level = {side['level']!r}"] if level is not None
+                                        else [])
+    for k, v in (meta or {}).items():
+        lines.append(f"{k} = {json.dumps(v)}")
+    path.with_suffix(".toml").write_text("\n".join(lines) + "\n")
+    return path
