@@ -130,6 +130,7 @@ def run(
         result = run_study(study, runner, log=lambda s: console.print(f"[cyan]{s}"))
     finally:
         runner.progress.close()
+        runner.close()
     data = results_json(result)
     (out_dir / "results.json").write_text(json.dumps(data, indent=1, sort_keys=False))
     (out_dir / "timing.json").write_text(json.dumps(

@@ -6,12 +6,12 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from .executor import BACKENDS, default_workers, run
+from .executor import BACKENDS, ProcessPool, default_workers, run
 from .spec import RunResult, RunSpec, execute
 from .store import RunStore
 
-__all__ = ["BACKENDS", "RunCounts", "RunResult", "RunSpec", "RunStore", "Runner",
-           "default_workers", "execute"]
+__all__ = ["BACKENDS", "ProcessPool", "RunCounts", "RunResult", "RunSpec", "RunStore",
+           "Runner", "default_workers", "execute"]
 
 
 @dataclass
@@ -49,6 +49,7 @@ class Runner:
     retry_failed: bool = False
     counts: RunCounts = field(default_factory=RunCounts)
     _seen: set = field(default_factory=set)
+    _pool: ProcessPool | None = None
 
     def run(self, specs: Sequence[RunSpec], label: str = "runs",
             on_result: Callable[[RunSpec, RunResult], None] | None = None) -> dict[str, str]:
@@ -83,11 +84,25 @@ class Runner:
 
         try:
             if todo:
+                if self.backend == "processes" and self._pool is None:
+                    self._pool = ProcessPool(self.workers)
                 run(todo, done, backend=self.backend, workers=self.workers,
-                    scheduler=self.scheduler)
+                    scheduler=self.scheduler, pool=self._pool)
         finally:
             self.progress.stop()
         return status
+
+    def close(self) -> None:
+        """Stop the worker processes (a Runner is reusable until then)."""
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
+
+    def __enter__(self) -> Runner:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
     def load(self, key: str) -> RunResult | None:
         return self.store.load(key)

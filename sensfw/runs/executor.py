@@ -74,6 +74,16 @@ def _worker_main(tasks, results, wid: int) -> None:
         results.put((wid, execute(spec)))
 
 
+def _context():
+    """Forkserver: workers fork from a server that has already imported numpy, scipy, Exudyn
+    and sensfw, so starting (or replacing) a worker costs milliseconds, and no thread of the
+    parent (progress bar) is forked."""
+    ctx = mp.get_context("forkserver")
+    ctx.set_forkserver_preload(["numpy", "scipy.signal", "exudyn", "sensfw.runs.spec",
+                                "sensfw.models"])
+    return ctx
+
+
 class _Worker:
     def __init__(self, ctx, results, wid: int):
         self.tasks, child_end = ctx.Pipe()
@@ -95,48 +105,81 @@ class _Worker:
             self.proc.join()
 
 
-def run_processes(specs: Sequence[RunSpec], on_result: OnResult, workers: int | None = None,
-                  poll: float = 0.1) -> None:
-    """Local pool of worker processes fed one run at a time. A worker that exceeds a run's
-    timeout, or dies, is killed and replaced; its run is recorded as failed."""
-    pending = deque(specs)
-    if not pending:
-        return
-    ctx = mp.get_context("spawn")
-    results = ctx.Queue()
-    n = min(workers or default_workers(), len(pending))
-    pool = {i: _Worker(ctx, results, i) for i in range(n)}
-    busy: dict[int, tuple[RunSpec, float]] = {}
-    try:
-        while pending or busy:
-            for wid, w in pool.items():
-                if wid not in busy and pending:
-                    spec = pending.popleft()
-                    w.tasks.send(spec)
-                    busy[wid] = (spec, time.monotonic())
-            try:
-                wid, res = results.get(timeout=poll)
-                if wid in busy and busy[wid][0].key() == res.key:
-                    spec, _ = busy.pop(wid)
-                    on_result(spec, res)
-            except queue.Empty:
-                pass
-            now = time.monotonic()
-            for wid, (spec, start) in list(busy.items()):
-                w = pool[wid]
-                reason = None
-                if not w.proc.is_alive():
-                    reason = f"worker process died (exit code {w.proc.exitcode})"
-                elif spec.timeout and now - start > spec.timeout:
-                    reason = f"timeout: no result after {spec.timeout:g} s"
-                if reason:
-                    w.stop(kill=True)
-                    pool[wid] = _Worker(ctx, results, wid)
-                    busy.pop(wid)
-                    on_result(spec, RunResult(spec.key(), False, error=reason, wall=now - start))
-    finally:
-        for w in pool.values():
-            w.stop(kill=bool(busy))
+class ProcessPool:
+    """A pool of worker processes fed one run at a time. A worker that exceeds a run's
+    timeout, or dies, is killed and replaced; its run is recorded as failed. Reusable across
+    batches (stages) of a study; close it (or use it as a context manager) at the end."""
+
+    def __init__(self, workers: int | None = None):
+        self.n = workers or default_workers()
+        self._ctx = self._results = None
+        self._pool: dict[int, _Worker] = {}
+
+    def _start(self, n: int) -> None:
+        if self._ctx is None:
+            self._ctx = _context()
+            self._results = self._ctx.Queue()
+        for wid in range(n):
+            if wid not in self._pool or not self._pool[wid].proc.is_alive():
+                self._pool[wid] = _Worker(self._ctx, self._results, wid)
+
+    def map(self, specs: Sequence[RunSpec], on_result: OnResult, poll: float = 0.1) -> None:
+        pending = deque(specs)
+        if not pending:
+            return
+        self._start(min(self.n, len(pending)))
+        busy: dict[int, tuple[RunSpec, float]] = {}
+        clean = False
+        try:
+            while pending or busy:
+                for wid, w in self._pool.items():
+                    if wid not in busy and pending:
+                        spec = pending.popleft()
+                        w.tasks.send(spec)
+                        busy[wid] = (spec, time.monotonic())
+                try:
+                    wid, res = self._results.get(timeout=poll)
+                    if wid in busy and busy[wid][0].key() == res.key:
+                        spec, _ = busy.pop(wid)
+                        on_result(spec, res)
+                except queue.Empty:
+                    pass
+                now = time.monotonic()
+                for wid, (spec, start) in list(busy.items()):
+                    w = self._pool[wid]
+                    reason = None
+                    if not w.proc.is_alive():
+                        reason = f"worker process died (exit code {w.proc.exitcode})"
+                    elif spec.timeout and now - start > spec.timeout:
+                        reason = f"timeout: no result after {spec.timeout:g} s"
+                    if reason:
+                        w.stop(kill=True)
+                        self._pool[wid] = _Worker(self._ctx, self._results, wid)
+                        busy.pop(wid)
+                        on_result(spec, RunResult(spec.key(), False, error=reason,
+                                                  wall=now - start))
+            clean = True
+        finally:
+            if not clean:  # interrupted: do not leave runs going
+                self.close(kill=True)
+
+    def close(self, kill: bool = False) -> None:
+        for w in self._pool.values():
+            w.stop(kill=kill)
+        self._pool.clear()
+
+    def __enter__(self) -> ProcessPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close(kill=exc[0] is not None)
+
+
+def run_processes(specs: Sequence[RunSpec], on_result: OnResult,
+                  workers: int | None = None) -> None:
+    """One-off :class:`ProcessPool` run."""
+    with ProcessPool(workers) as pool:
+        pool.map(specs, on_result)
 
 
 # ---- Dask ------------------------------------------------------------------------------------
@@ -180,13 +223,17 @@ def run_dask(specs: Sequence[RunSpec], on_result: OnResult, scheduler: str | Non
 
 
 def run(specs: Sequence[RunSpec], on_result: OnResult, backend: str = "processes",
-        workers: int | None = None, scheduler: str | None = None) -> None:
-    """Run ``specs`` on ``backend`` ("serial", "processes" or "dask")."""
-    if backend == "serial" or (backend == "processes" and (workers == 1 or len(specs) <= 1)
-                               and not any(s.timeout for s in specs)):
+        workers: int | None = None, scheduler: str | None = None,
+        pool: ProcessPool | None = None) -> None:
+    """Run ``specs`` on ``backend`` ("serial", "processes" or "dask"); ``pool`` reuses a
+    process pool across calls."""
+    if backend == "serial":
         run_serial(specs, on_result)
     elif backend == "processes":
-        run_processes(specs, on_result, workers)
+        if pool is not None:
+            pool.map(specs, on_result)
+        else:
+            run_processes(specs, on_result, workers)
     elif backend == "dask":
         run_dask(specs, on_result, scheduler)
     else:
