@@ -1,0 +1,85 @@
+"""FRF-based scorers: the paper's scalar (Eq. 11, Sect. 3.1) and a robust dB-RMS variant."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from ..models.base import Signals
+from ..plugins import scorers
+from ..signal import ESTIMATORS, frf
+from .base import Scorer, ScorerError
+
+
+class _FRFScorer(Scorer):
+    needs_reference = True
+    defaults: ClassVar[dict] = {"band": (50.0, 5000.0), "estimator": "Hv", "eps": 1.0,
+                                "nperseg": None, "db_ref": 1.0}
+
+    def validate(self) -> None:
+        o = self.options
+        band = o["band"]
+        if not (isinstance(band, (list, tuple)) and len(band) == 2
+                and 0 <= float(band[0]) < float(band[1])):
+            raise ScorerError(f"scorer {self.name!r}: band must be [fmin, fmax] in Hz with "
+                              f"fmin < fmax, got {band!r}")
+        if o["estimator"] not in ESTIMATORS:
+            raise ScorerError(f"scorer {self.name!r}: estimator must be one of {ESTIMATORS}")
+        if not float(o["eps"]) > 0 or not float(o["db_ref"]) > 0:
+            raise ScorerError(f"scorer {self.name!r}: eps and db_ref must be > 0")
+
+    def db(self, signals: Signals) -> tuple[np.ndarray, np.ndarray]:
+        """FRF magnitude in dB re ``db_ref`` over the band, and the frequencies."""
+        o = self.options
+        f, H = frf(signals.force, self.signal(signals), signals.fs, estimator=o["estimator"],
+                   eps=float(o["eps"]), nperseg=o["nperseg"], fmin=float(o["band"][0]),
+                   fmax=float(o["band"][1]))
+        mag = np.abs(H)
+        if not np.all(np.isfinite(mag)) or np.any(mag == 0):
+            raise ScorerError(f"scorer {self.name!r}: the FRF is zero or undefined in the band "
+                              "(no excitation there?)")
+        return f, 20 * np.log10(mag / float(o["db_ref"]))
+
+    def pair(self, signals: Signals, reference: Signals | None):
+        if reference is None:
+            raise ScorerError(f"scorer {self.name!r} compares with a reference run; none given")
+        f, y = self.db(signals)
+        f0, y0 = self.db(reference)
+        if len(f) != len(f0) or not np.allclose(f, f0):
+            raise ScorerError(f"scorer {self.name!r}: run and reference have different "
+                              "frequency axes (record length or sample rate differ)")
+        return y, y0
+
+
+@scorers.register("frf_scalar")
+class FRFScalar(_FRFScorer):
+    """The paper's FRF scalar (Eq. 11, Sect. 3.1).
+
+    ``y_i = <dB|H_i|, dB|H_0|>`` is the dot product of the run's and the reference's FRF
+    magnitudes in dB over the band; the score is the run's relative change against the
+    reference's own product, ``(y_i - y_0) / y_0`` with ``y_0 = <dB|H_0|, dB|H_0|>`` (zero for
+    the reference itself). Caveat: the dot product of dB values depends on the dB reference
+    level (``db_ref``): a level near the FRF's magnitude makes dB values small and the scalar
+    erratic, and any change of ``db_ref`` changes the scores. ``frf_db_rms`` does not have
+    this dependence.
+    """
+
+    name = "frf_scalar"
+
+    def score(self, signals, reference=None):
+        y, y0 = self.pair(signals, reference)
+        ref = float(y0 @ y0)
+        return {"value": float((y @ y0 - ref) / ref)}
+
+
+@scorers.register("frf_db_rms")
+class FRFdBRMS(_FRFScorer):
+    """Robust variant: RMS over the band of ``dB|H_i| - dB|H_0|`` (dB). Independent of the dB
+    reference level, symmetric in run and reference, zero only when the magnitudes agree."""
+
+    name = "frf_db_rms"
+
+    def score(self, signals, reference=None):
+        y, y0 = self.pair(signals, reference)
+        return {"value": float(np.sqrt(np.mean((y - y0) ** 2)))}

@@ -1,0 +1,15 @@
+"""Signal analysis: FRF estimators (Eqs. 8-10), order map/spectrum and THD (Eqs. 12-17),
+spectrograms (Fig. 11)."""
+
+from .frf import ESTIMATORS, coherence, frf, hv_from_spectra, spectra
+from .orders import (
+    detrend_spectrum,
+    harmonic_amplitudes,
+    order_map,
+    order_spectrum,
+    thd,
+)
+from .spectrogram import spectrogram
+
+__all__ = ["ESTIMATORS", "coherence", "detrend_spectrum", "frf", "harmonic_amplitudes",
+           "hv_from_spectra", "order_map", "order_spectrum", "spectra", "spectrogram", "thd"]
