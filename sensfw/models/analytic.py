@@ -71,7 +71,7 @@ class TwoDOF(Model):
         return ParameterSet([
             P("m1", "kg", 1.0, 0.5, 2.0), P("m2", "kg", 0.5, 0.25, 1.0),
             P("k1", "N/mm", 4000.0, 2000.0, 8000.0), P("k2", "N/mm", 2000.0, 1000.0, 4000.0),
-            P("c1", "N*s/mm", 0.02, 0.01, 0.04), P("c2", "N*s/mm", 0.01, 0.005, 0.02),
+            P("c1", "N*s/mm", 0.1, 0.05, 0.2), P("c2", "N*s/mm", 0.05, 0.025, 0.1),
         ])
 
     @staticmethod
@@ -104,7 +104,7 @@ class TwoDOF(Model):
         Cout = np.hstack([-Mi @ K, -Mi @ C])  # accelerations
         Dout = Mi @ np.array([[1.0], [0.0]])
         dt = 1 / excitation.fs
-        Ad, Bd, Cd, Dd, _ = cont2discrete((A, B, Cout, Dout), dt, method="zoh")
+        Ad, Bd, Cd, Dd, _ = cont2discrete((A, B, Cout, Dout), dt, method="foh")
         t = excitation.time()
         force = excitation.force(t)
         _, acc, _ = dlsim((Ad, Bd, Cd, Dd, dt), force)

@@ -8,8 +8,10 @@ from .orders import (
     order_map,
     order_spectrum,
     thd,
+    thd_from_spectrum,
 )
 from .spectrogram import spectrogram
 
 __all__ = ["ESTIMATORS", "coherence", "detrend_spectrum", "frf", "harmonic_amplitudes",
-           "hv_from_spectra", "order_map", "order_spectrum", "spectra", "spectrogram", "thd"]
+           "hv_from_spectra", "order_map", "order_spectrum", "spectra", "spectrogram", "thd",
+           "thd_from_spectrum"]

@@ -1,0 +1,93 @@
+"""Each scorer returns its documented value on a constructed case (issue 2, item 3)."""
+
+import numpy as np
+import pytest
+
+from sensfw.errors import SensfwError, UnknownPluginError
+from sensfw.excitation import Chirp, chirp_phase
+from sensfw.models.analytic import TwoDOF
+from sensfw.models.base import Signals
+from sensfw.plugins import scorers
+from sensfw.scorers import make_scorer
+from sensfw.signal import frf
+
+EX = Chirp(50, 2000, 0.5, 20000, 1.0, tail=0.3)
+
+
+@pytest.fixture(scope="module")
+def run():
+    m = TwoDOF()
+    return m.simulate(m.parameters().nominal(), EX)
+
+
+def scaled(sig, g):
+    return Signals(t=sig.t, force=sig.force, channels={k: g * v for k, v in
+                                                       sig.channels.items()},
+                   fs=sig.fs, f_inst=sig.f_inst)
+
+
+def test_frf_scalar_of_reference_is_zero(run):
+    s = make_scorer("frf_scalar", channel="a1", band=[60.0, 1900.0])
+    assert s.score(run, run)["value"] == 0.0
+
+
+def test_frf_scalar_for_a_6db_gain_by_hand(run):
+    s = make_scorer("frf_scalar", channel="a1", band=[60.0, 1900.0])
+    f, H = frf(run.force, run.channels["a1"], run.fs, estimator="Hv", fmin=60, fmax=1900)
+    y0 = 20 * np.log10(np.abs(H))
+    g_db = 20 * np.log10(2.0)
+    # <y0 + g, y0> / <y0, y0> - 1 = g sum(y0) / sum(y0^2)
+    expected = g_db * y0.sum() / (y0 @ y0)
+    got = s.score(scaled(run, 2.0), run)["value"]
+    assert got == pytest.approx(expected, rel=1e-9)
+    # and it depends on the dB reference level (documented caveat)
+    s2 = make_scorer("frf_scalar", channel="a1", band=[60.0, 1900.0], db_ref=1e-3)
+    assert s2.score(scaled(run, 2.0), run)["value"] != pytest.approx(got, rel=0.1)
+
+
+def test_frf_db_rms_of_a_6db_gain(run):
+    s = make_scorer("frf_db_rms", channel="a1", band=[60.0, 1900.0])
+    assert s.score(scaled(run, 2.0), run)["value"] == pytest.approx(20 * np.log10(2), rel=1e-9)
+    s2 = make_scorer("frf_db_rms", channel="a1", band=[60.0, 1900.0], db_ref=1e-3)
+    assert s2.score(scaled(run, 2.0), run)["value"] == pytest.approx(20 * np.log10(2),
+                                                                      rel=1e-9)
+
+
+def harmonic_signals(a2):
+    t = EX.time()
+    phi = chirp_phase(np.minimum(t, EX.duration), EX.f0, EX.f1, EX.duration)
+    on = t < EX.duration
+    x = np.where(on, 0.8 * np.sin(phi) + a2 * np.sin(2 * phi), 0.0)
+    return Signals(t=t, force=EX.force(t), channels={"y": x}, fs=EX.fs, f_inst=EX.f_inst(t))
+
+
+def test_order_amplitude_thd_and_rms():
+    # only the sweep (not the silent tail) carries the harmonics; the tail frames carry
+    # nothing, so score a record without tail
+    ex = Chirp(50, 2000, 0.5, 20000, 1.0)
+    t = ex.time()
+    phi = chirp_phase(t, ex.f0, ex.f1, ex.duration)
+    x = 0.8 * np.sin(phi) + 0.08 * np.sin(2 * phi)
+    sig = Signals(t=t, force=ex.force(t), channels={"y": x}, fs=ex.fs, f_inst=ex.f_inst(t))
+    assert make_scorer("order_amplitude", order=1).score(sig)["value"] == pytest.approx(
+        0.8 / np.sqrt(2), rel=0.02)
+    assert make_scorer("order_amplitude", order=2).score(sig)["value"] == pytest.approx(
+        0.08 / np.sqrt(2), rel=0.02)
+    assert make_scorer("thd").score(sig)["value"] == pytest.approx(10.0, rel=0.02)
+    rms = np.sqrt(np.mean(x**2))
+    assert make_scorer("rms", channel="y").score(sig)["value"] == pytest.approx(rms, rel=1e-12)
+
+
+def test_unknown_scorer_and_bad_options_are_clear():
+    with pytest.raises(UnknownPluginError, match="unknown scorer 'thdd'; available: .*thd"):
+        scorers.get("thdd")
+    with pytest.raises(SensfwError, match="scorer 'thd': unknown option"):
+        make_scorer("thd", harmonics=3)
+    with pytest.raises(SensfwError, match="order must be an integer >= 1"):
+        make_scorer("order_amplitude", order=0)
+    with pytest.raises(SensfwError, match="band must be"):
+        make_scorer("frf_scalar", band=[5000.0, 50.0])
+    with pytest.raises(SensfwError, match="no channel 'nope'"):
+        make_scorer("rms", channel="nope").score(harmonic_signals(0.1))
+    with pytest.raises(SensfwError, match="needs.*reference|compares with a reference"):
+        make_scorer("frf_scalar").score(harmonic_signals(0.1))
