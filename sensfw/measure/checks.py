@@ -160,7 +160,7 @@ def align(meas: Measurement, excitation: Chirp) -> Measurement:
     aligned = Signals(t=t, force=cut(sig.force), channels={k: cut(v) for k, v in
                                                            sig.channels.items()},
                       fs=excitation.fs, f_inst=excitation.f_inst(t), units=dict(sig.units),
-                      meta={**sig.meta, "delay_s": delay})
+                      meta={**sig.meta, "delay_s": delay}, sweep_end=excitation.duration)
     return replace(meas, signals=aligned, notes=notes)
 
 

@@ -109,7 +109,8 @@ class TwoDOF(Model):
         force = excitation.force(t)
         _, acc, _ = dlsim((Ad, Bd, Cd, Dd, dt), force)
         return Signals(t=t, force=force, channels={"a1": acc[:, 0], "a2": acc[:, 1]},
-                       fs=excitation.fs, f_inst=excitation.f_inst(t))
+                       fs=excitation.fs, f_inst=excitation.f_inst(t),
+                       sweep_end=excitation.duration)
 
 
 @models.register("fault_injection")

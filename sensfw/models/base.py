@@ -29,6 +29,7 @@ class Signals:
     f_inst: np.ndarray | None = None
     units: dict[str, str] = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
+    sweep_end: float | None = None  # time (s) at which the sweep ends (a silent tail follows)
 
     def __post_init__(self) -> None:
         n = len(self.t)
@@ -46,9 +47,22 @@ class Signals:
                 f"no channel {name!r}; available: {', '.join(['force', *self.channels])}"
             ) from None
 
+    def sweep(self) -> Signals:
+        """The part recorded while the sweep runs (without the silent tail): what order
+        analysis looks at, since the tail holds ring-down only."""
+        if self.sweep_end is None:
+            return self
+        n = min(len(self.t), max(8, round(self.sweep_end * self.fs)))
+        return Signals(t=self.t[:n], force=self.force[:n],
+                       channels={k: v[:n] for k, v in self.channels.items()}, fs=self.fs,
+                       f_inst=None if self.f_inst is None else self.f_inst[:n],
+                       units=dict(self.units), meta=dict(self.meta), sweep_end=None)
+
     def to_arrays(self) -> dict[str, np.ndarray]:
         """Flat dict of arrays (for ``np.savez``)."""
         out = {"t": self.t, "force": self.force, "fs": np.array(self.fs)}
+        if self.sweep_end is not None:
+            out["sweep_end"] = np.array(self.sweep_end)
         if self.f_inst is not None:
             out["f_inst"] = self.f_inst
         out.update({f"ch:{k}": v for k, v in self.channels.items()})
@@ -58,8 +72,10 @@ class Signals:
     def from_arrays(cls, arrays: Mapping[str, np.ndarray], **kw) -> Signals:
         channels = {k[3:]: np.asarray(v) for k, v in arrays.items() if k.startswith("ch:")}
         f_inst = arrays["f_inst"] if "f_inst" in arrays else None
+        end = float(arrays["sweep_end"]) if "sweep_end" in arrays else None
         return cls(t=np.asarray(arrays["t"]), force=np.asarray(arrays["force"]),
-                   channels=channels, fs=float(arrays["fs"]), f_inst=f_inst, **kw)
+                   channels=channels, fs=float(arrays["fs"]), f_inst=f_inst, sweep_end=end,
+                   **kw)
 
 
 @dataclass(frozen=True)

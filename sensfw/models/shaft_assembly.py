@@ -592,7 +592,8 @@ class ShaftAssembly(Model):
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),
                        units={"force": "N", **{c: "m/s^2" for c in channels}},
-                       meta={"model": self.name, "wall_s": time.perf_counter() - t0})
+                       meta={"model": self.name, "wall_s": time.perf_counter() - t0},
+                       sweep_end=excitation.duration)
 
 
 class NonlinearContacts:

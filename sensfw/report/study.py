@@ -16,12 +16,13 @@ def _signals(result, key):
     return res.signals if res is not None and res.ok else None
 
 
-def _frf_db(sig, channel):
-    from ..signal import frf
+def _frf_db(sig, channel, smooth: int = 24):
+    """Hv FRF in dB, smoothed over 1/24 octave for display."""
+    from ..signal import frf, octave_smooth
 
     f, H = frf(sig.force, sig.channel(channel), sig.fs, estimator="Hv")
     with np.errstate(divide="ignore"):
-        return f, 20 * np.log10(np.abs(H))
+        return f, 20 * np.log10(octave_smooth(f, H, smooth))
 
 
 def frf_overlay(result, stage, channel, top: int = 4):
@@ -51,7 +52,8 @@ def frf_overlay(result, stage, channel, top: int = 4):
     ax.set_ylabel(f"|H| (dB re 1 (m/s²)/N), {channel}")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
-    ax.set_title("FRF from shaker force to the output, screen runs against the reference")
+    ax.set_title("FRF (Hv, 1/24-octave smoothed) from shaker force to the output: screen runs "
+                 "against the reference")
     return fig
 
 
@@ -82,6 +84,7 @@ def order_spectrum_mean(result, stage, channel):
         sig = _signals(result, key)
         if sig is None:
             continue
+        sig = sig.sweep()
         n, P = order_spectrum(sig.channel(channel), sig.fs, sig.f_inst)
         if orders is None:
             orders = n

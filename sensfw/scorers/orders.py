@@ -1,5 +1,5 @@
 """Order-based scorers: THD (Eq. 12) and the amplitude of one order (Fig. 10's base
-frequency and first harmonic)."""
+frequency and first harmonic). They analyse the sweep only, not a silent tail after it."""
 
 from __future__ import annotations
 
@@ -35,6 +35,7 @@ class THD(Scorer):
 
     def score(self, signals, reference=None):
         o = self.options
+        signals = signals.sweep()
         return {"value": thd(self.signal(signals), signals.fs, _f_inst(self, signals),
                              n_harmonics=o["n_harmonics"], unit=o["unit"],
                              detrend=bool(o["detrend"]))}
@@ -55,6 +56,7 @@ class OrderAmplitude(Scorer):
 
     def score(self, signals, reference=None):
         n = self.options["order"]
+        signals = signals.sweep()
         P = harmonic_amplitudes(self.signal(signals), signals.fs, _f_inst(self, signals),
                                 harmonics=[n], detrend=bool(self.options["detrend"]))
         return {"value": P[n]}

@@ -1,7 +1,7 @@
 """Signal analysis: FRF estimators (Eqs. 8-10), order map/spectrum and THD (Eqs. 12-17),
 spectrograms (Fig. 11)."""
 
-from .frf import ESTIMATORS, coherence, frf, hv_from_spectra, spectra
+from .frf import ESTIMATORS, coherence, frf, hv_from_spectra, octave_smooth, spectra
 from .orders import (
     detrend_spectrum,
     harmonic_amplitudes,
@@ -13,5 +13,5 @@ from .orders import (
 from .spectrogram import spectrogram
 
 __all__ = ["ESTIMATORS", "coherence", "detrend_spectrum", "frf", "harmonic_amplitudes",
-           "hv_from_spectra", "order_map", "order_spectrum", "spectra", "spectrogram", "thd",
-           "thd_from_spectrum"]
+           "hv_from_spectra", "octave_smooth", "order_map", "order_spectrum", "spectra",
+           "spectrogram", "thd", "thd_from_spectrum"]

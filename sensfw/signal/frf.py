@@ -133,3 +133,17 @@ def coherence(x_in, x_out, fs: float, nperseg: int | None = 1024, **kw):
     f, _, coh = frf(x_in, x_out, fs, estimator="H1", nperseg=nperseg, return_coherence=True,
                     **kw)
     return f, coh
+
+
+def octave_smooth(f, H, fraction: int = 24) -> np.ndarray:
+    """Magnitude of ``H`` smoothed over 1/``fraction``-octave windows (energy average
+    ``sqrt(mean |H|^2)`` over ``[f 2^(-1/2n), f 2^(1/2n)]``), for plots of swept-sine FRFs
+    whose fine ripple hides the resonances."""
+    f = np.asarray(f, float)
+    p = np.abs(np.asarray(H)) ** 2
+    c = np.concatenate([[0.0], np.cumsum(p)])
+    half = 2 ** (0.5 / fraction)
+    lo = np.searchsorted(f, f / half, side="left")
+    hi = np.searchsorted(f, f * half, side="right")
+    n = np.maximum(hi - lo, 1)
+    return np.sqrt((c[hi] - c[lo]) / n)

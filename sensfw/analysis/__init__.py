@@ -1,0 +1,1 @@
+"""Analyses on top of designs and surrogates: validation, Sobol indices, comparisons."""

@@ -1,0 +1,104 @@
+"""Regression validation: fit quality, predictive quality and confirmation runs.
+
+R^2 of a 15-term model on 81 runs flatters it; cross-validated Q^2 (leave-one-out and
+k-fold), residual plots, variance inflation factors and confirmation runs at new points tell
+whether it predicts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from sklearn.base import clone
+from sklearn.model_selection import KFold
+
+from ..errors import AnalysisError
+
+
+def _arrays(X, y):
+    Xa = X.to_numpy(dtype=float) if isinstance(X, pd.DataFrame) else np.asarray(X, float)
+    return Xa, np.asarray(y, float).ravel()
+
+
+def q2_cv(estimator, X, y, splitter) -> float:
+    """Predictive Q^2 = 1 - PRESS / SS_tot from refits on the training folds."""
+    Xa, ya = _arrays(X, y)
+    frame = X if isinstance(X, pd.DataFrame) else None
+    pred = np.empty_like(ya)
+    for train, test in splitter.split(Xa):
+        est = clone(estimator)
+        if frame is not None:
+            est.fit(frame.iloc[train], ya[train])
+            pred[test] = est.predict(frame.iloc[test])
+        else:
+            est.fit(Xa[train], ya[train])
+            pred[test] = est.predict(Xa[test])
+    ss = float(np.sum((ya - ya.mean()) ** 2))
+    return float(1 - np.sum((ya - pred) ** 2) / ss) if ss > 0 else float("nan")
+
+
+def vif(X) -> dict[str, float]:
+    """Variance inflation factors of the columns of X (1 = orthogonal)."""
+    from statsmodels.stats.outliers_influence import variance_inflation_factor
+
+    Xa, _ = _arrays(X, np.zeros(len(X)))
+    names = list(X.columns) if isinstance(X, pd.DataFrame) else [f"x{i + 1}" for i in
+                                                                 range(Xa.shape[1])]
+    A = np.column_stack([np.ones(len(Xa)), Xa])
+    return {n: float(variance_inflation_factor(A, i + 1)) for i, n in enumerate(names)}
+
+
+def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
+    """Quality of a fitted ``estimator`` on its training data ``X, y`` (JSON-serialisable)."""
+    Xa, ya = _arrays(X, y)
+    n = len(ya)
+    if n < 3:
+        raise AnalysisError(f"validation needs at least 3 runs, got {n}")
+    fitted = np.asarray(estimator.predict(X), float)
+    resid = ya - fitted
+    ss = float(np.sum((ya - ya.mean()) ** 2))
+    summary = getattr(estimator, "summary_", {}) or {}
+    out = {
+        "n_obs": n,
+        "r2": float(1 - np.sum(resid**2) / ss) if ss > 0 else float("nan"),
+        "r2_adj": summary.get("r2_adj"),
+        "rmse": float(np.sqrt(np.mean(resid**2))),
+        "f_stat": summary.get("f_stat"),
+        "f_pvalue": summary.get("f_pvalue"),
+        "q2_loo": summary.get("q2"),
+        "q2_kfold": None,
+        "fitted": fitted.tolist(),
+        "residuals": resid.tolist(),
+    }
+    if out["q2_loo"] is None:
+        out["q2_loo"] = q2_cv(estimator, X, ya, KFold(n_splits=n))
+    kk = min(k, n)
+    if kk >= 2:
+        out["q2_kfold"] = q2_cv(estimator, X, ya, KFold(n_splits=kk, shuffle=True,
+                                                          random_state=seed))
+    (osm, osr), (slope, intercept, _) = stats.probplot(resid, dist="norm")
+    out["qq"] = {"theoretical": osm.tolist(), "ordered": osr.tolist(), "slope": float(slope),
+                 "intercept": float(intercept)}
+    if Xa.shape[1] >= 2 and n > Xa.shape[1] + 1:
+        out["vif"] = vif(X)
+    return out
+
+
+def confirmation(estimator, X_new, y_new, alpha: float = 0.05) -> dict:
+    """Prediction error at new points, and the coverage of (1 - alpha) prediction intervals
+    where the estimator provides them (``predict_interval``)."""
+    _, ya = _arrays(X_new, y_new)
+    if len(ya) == 0:
+        raise AnalysisError("no confirmation runs finished")
+    pred = np.asarray(estimator.predict(X_new), float)
+    err = ya - pred
+    ss = float(np.sum((ya - ya.mean()) ** 2))
+    out = {"n": len(ya), "rmse": float(np.sqrt(np.mean(err**2))),
+           "max_abs_error": float(np.max(np.abs(err))),
+           "r2": float(1 - np.sum(err**2) / ss) if ss > 0 else float("nan"),
+           "level": 1 - alpha, "coverage": None}
+    if hasattr(estimator, "predict_interval"):
+        lo, hi = estimator.predict_interval(X_new, alpha=alpha)
+        out["coverage"] = float(np.mean((ya >= lo) & (ya <= hi)))
+    return out

@@ -1,0 +1,86 @@
+"""The design contract: a design generates the run table of a design space and analyses the
+responses of its runs (pairs with the same name, as SALib's sample/analyze modules)."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+import pandas as pd
+
+from ..errors import AnalysisError, SensfwError
+from ..params import DesignSpace
+
+
+class DesignError(SensfwError, ValueError):
+    """A design was given a bad option or cannot be built for the space."""
+
+
+@dataclass
+class ScreeningResult:
+    """What a design's analysis says about its variables.
+
+    ``importance`` (variable -> non-negative number, higher = more important) drives ranking
+    and selection; ``table`` holds the design-specific details; ``notes`` what was missing.
+    """
+
+    importance: pd.Series
+    table: pd.DataFrame
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def ranking(self) -> list[str]:
+        return list(self.importance.sort_values(ascending=False, kind="stable").index)
+
+    def select(self, threshold: float | None = None,
+               max_variables: int | None = None) -> list[str]:
+        """Variables with importance above ``threshold`` (most important first), at most
+        ``max_variables``."""
+        out = [v for v in self.ranking
+               if threshold is None or self.importance[v] > threshold]
+        return out[:max_variables] if max_variables else out
+
+
+class Design(ABC):
+    """Base class of design plugins (group ``sensfw.designs``).
+
+    Subclasses set ``name`` and ``defaults`` (every option with its default); options are
+    validated at construction so a study fails before anything runs.
+    """
+
+    name: ClassVar[str] = "design"
+    defaults: ClassVar[dict[str, Any]] = {}
+
+    def __init__(self, **options: Any):
+        unknown = set(options) - set(self.defaults)
+        if unknown:
+            raise DesignError(f"design {self.name!r}: unknown option(s) "
+                              f"{', '.join(sorted(unknown))}; accepted: "
+                              f"{', '.join(sorted(self.defaults)) or '(none)'}")
+        self.options = {**self.defaults, **options}
+        self.validate()
+
+    def validate(self) -> None:  # noqa: B027  (optional hook)
+        """Check ``self.options``; raise :class:`DesignError` naming the option."""
+
+    @abstractmethod
+    def n_runs(self, space: DesignSpace) -> int:
+        """Number of runs, known before anything runs."""
+
+    @abstractmethod
+    def generate(self, space: DesignSpace, seed: int | None = None) -> pd.DataFrame:
+        """Physical values of the design variables, one row per run (columns =
+        ``space.names``, index = run labels); deterministic for a seed."""
+
+    @abstractmethod
+    def analyze(self, space: DesignSpace, table: pd.DataFrame, y) -> ScreeningResult:
+        """Importance of every variable from the responses ``y`` (NaN = failed run)."""
+
+
+def responses(table: pd.DataFrame, y, design: str) -> np.ndarray:
+    y = np.asarray(y, dtype=float).ravel()
+    if len(y) != len(table):
+        raise AnalysisError(f"{design}: {len(y)} responses for {len(table)} runs")
+    return y
