@@ -503,7 +503,7 @@ class ShaftAssembly(Model):
                 node = mbs.AddNode(ei.NodePoint2D(referenceCoordinates=list(b.ref),
                                                   initialCoordinates=q_init))
                 bodies[b.name] = mbs.AddObject(ei.ObjectMassPoint2D(nodeNumber=node,
-                                                                    physicsMass=b.mass))
+                                                                    mass=b.mass))
             reference[b.name] = b.ref
 
         def marker(body, r):

@@ -37,7 +37,7 @@ def test_parameters_are_table_1_plus_preload():
     from sensfw.params import DesignSpace
 
     assert len(DesignSpace.from_parameters(PARAMETERS, GROUPS)) == 19  # Sect. 3.1
-    with pytest.raises(ParameterError, match="slide_damping.*outside its bounds"):
+    with pytest.raises(ParameterError, match=r"slide_damping.*outside its bounds"):
         ShaftAssembly().simulate({"slide_damping": 1000.0}, Chirp(50, 5000, 0.01, 20000))
 
 
@@ -111,7 +111,7 @@ def test_halving_the_time_step_changes_little(corner):
     out = []
     for h in (1e-5, 5e-6):
         sig = m.simulate(CORNERS[corner], ex, SolverSettings(step=h))
-        f, H = axial_frf(sig, nperseg=1024)
+        _, H = axial_frf(sig, nperseg=1024)
         out.append((20 * np.log10(np.abs(H)), thd(sig.channels["crank_axial"], sig.fs,
                                                     sig.f_inst)))
     rms_db = np.sqrt(np.mean((out[0][0] - out[1][0]) ** 2))

@@ -33,7 +33,7 @@ def test_frf_scalar_of_reference_is_zero(run):
 
 def test_frf_scalar_for_a_6db_gain_by_hand(run):
     s = make_scorer("frf_scalar", channel="a1", band=[60.0, 1900.0])
-    f, H = frf(run.force, run.channels["a1"], run.fs, estimator="Hv", fmin=60, fmax=1900)
+    _f, H = frf(run.force, run.channels["a1"], run.fs, estimator="Hv", fmin=60, fmax=1900)
     y0 = 20 * np.log10(np.abs(H))
     g_db = 20 * np.log10(2.0)
     # <y0 + g, y0> / <y0, y0> - 1 = g sum(y0) / sum(y0^2)
@@ -79,7 +79,7 @@ def test_order_amplitude_thd_and_rms():
 
 
 def test_unknown_scorer_and_bad_options_are_clear():
-    with pytest.raises(UnknownPluginError, match="unknown scorer 'thdd'; available: .*thd"):
+    with pytest.raises(UnknownPluginError, match=r"unknown scorer 'thdd'; available: .*thd"):
         scorers.get("thdd")
     with pytest.raises(SensfwError, match="scorer 'thd': unknown option"):
         make_scorer("thd", harmonics=3)
@@ -89,5 +89,5 @@ def test_unknown_scorer_and_bad_options_are_clear():
         make_scorer("frf_scalar", band=[5000.0, 50.0])
     with pytest.raises(SensfwError, match="no channel 'nope'"):
         make_scorer("rms", channel="nope").score(harmonic_signals(0.1))
-    with pytest.raises(SensfwError, match="needs.*reference|compares with a reference"):
+    with pytest.raises(SensfwError, match=r"needs.*reference|compares with a reference"):
         make_scorer("frf_scalar").score(harmonic_signals(0.1))

@@ -76,7 +76,7 @@ def test_hv_is_the_total_least_squares_eigenvector(response):
     ref = np.empty_like(hv)
     for i in range(len(f)):
         G = np.array([[spp[i], spx[i]], [np.conj(spx[i]), sxx[i]]])
-        w, V = np.linalg.eigh(G)
+        _w, V = np.linalg.eigh(G)
         v = V[:, 0]
         ref[i] = -v[0] / v[1]
     sel = np.abs(spx) > 1e-12 * np.max(np.abs(spx))

@@ -45,7 +45,7 @@ def test_pure_chirp_has_no_distortion():
 
 def test_only_order_2_below_nyquist_at_5khz_as_in_the_paper():
     x, fi = swept(5000.0)
-    orders, _, M = order_map(x, FS, fi)
+    orders, _, _M = order_map(x, FS, fi)
     assert orders[-1] == 2.0  # fs / (2 f1) = 2: order 3 would alias at the end of the sweep
     # THD is then 100 |P2| / |P1| = 10 %, not 100 sqrt(a2^2 + a3^2) = 11.2 %: order 3 is not
     # counted (at the end of the sweep it is at 15 kHz and aliases to 5 kHz in the sampled
