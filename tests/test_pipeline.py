@@ -1,0 +1,170 @@
+"""The paper's pipeline end to end on studies/quick.toml (issue 4)."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK = ROOT / "studies" / "quick.toml"
+
+
+def sensfw(*args, timeout=300):
+    return subprocess.run([sys.executable, "-m", "sensfw", *map(str, args)],
+                          capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+
+
+def stages(path):
+    data = json.loads(Path(path).read_text())
+    return data, {s["name"]: s for s in data["stages"]}
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("quick")
+    t0 = time.perf_counter()
+    proc = sensfw("run", QUICK, "--out", out, "--workers", 2, "--no-progress")
+    wall = time.perf_counter() - t0
+    assert proc.returncode == 0, proc.stderr
+    return out, wall
+
+
+def test_quick_study_runs_the_three_steps(quick):
+    out, wall = quick
+    assert wall < 60, wall
+    data, st = stages(out / "results.json")
+    k = len(st["screen"]["variables"])
+    assert st["screen"]["n_runs"] == 2 * k + 1
+    sel = st["screen"]["selected"]
+    assert 1 <= len(sel) <= 2 and set(sel) <= set(st["screen"]["variables"])
+    assert set(st["screen"]["sensitivity"]) == set(st["screen"]["variables"])
+    m = len(sel)
+    assert st["doe"]["variables"] == sel
+    assert st["doe"]["n_runs"] == 3**m
+    assert set(st["doe"]["regression"]) == {"P1", "P2", "THD"}
+    for reg in st["doe"]["regression"].values():
+        assert len(reg["coefficients"]) == 1 + 2 * m + m * (m - 1) // 2
+        assert reg["n_obs"] == 3**m
+        for key in ("r2", "r2_adj", "q2", "f_stat", "f_pvalue"):
+            assert key in reg
+    # runs are counted once per unique key (the OAT nominal is also the FRF reference)
+    keys = {r["key"] for s in data["stages"] for r in s["runs"]}
+    assert data["runs"]["total"] == len(keys) and data["runs"]["failed"] == 0
+    html = (out / "report.html").read_text()
+    assert html.count("data:image/png;base64") >= 6  # Figs. 7-11 analogues
+
+
+def test_rerun_computes_nothing_and_gives_identical_results(quick, tmp_path):
+    out, _ = quick
+    before = json.loads((out / "results.json").read_text())
+    proc = sensfw("run", QUICK, "--out", out, "--no-progress", "--no-report")
+    assert proc.returncode == 0, proc.stderr
+    after = json.loads((out / "results.json").read_text())
+    assert after["runs"]["new"] == 0
+    assert after["runs"]["cached"] == before["runs"]["total"]
+    assert after["stages"] == before["stages"]
+
+
+def test_killed_run_resumes_with_only_the_missing_runs(quick, tmp_path):
+    ref, _ = quick
+    out = tmp_path / "killed"
+    proc = subprocess.Popen([sys.executable, "-m", "sensfw", "run", str(QUICK), "--out",
+                             str(out), "--workers", "2", "--no-progress"], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    store = out / "runs"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        if store.exists() and len(list(store.glob("*.json"))) >= 6:
+            break
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)  # the CLI and its workers, at once
+    proc.wait()
+    done = len(list(store.glob("*.json")))
+    assert done >= 6
+    again = sensfw("run", QUICK, "--out", out, "--no-progress", "--no-report")
+    assert again.returncode == 0, again.stderr
+    data, _ = stages(out / "results.json")
+    assert data["runs"]["cached"] >= done - 2  # a record may have been torn by the kill
+    assert data["runs"]["new"] == data["runs"]["total"] - data["runs"]["cached"]
+    assert data["runs"]["new"] < data["runs"]["total"]
+    reference = json.loads((ref / "results.json").read_text())
+    assert data["stages"] == reference["stages"]
+
+
+FAULTY = """
+[study]
+name = "faulty"
+[model]
+name = "fault_injection"
+options = {{ model = "two_dof", diverge = {{ parameter = "k1", above = 7000.0 }} }}
+output = "a1"
+[excitation]
+f0 = "50 Hz"
+f1 = "2 kHz"
+duration = "0.3 s"
+fs = "20 kHz"
+amplitude = "1 N"
+tail = "0.1 s"
+[execution]
+backend = "{backend}"
+[[stages]]
+name = "screen"
+design = "oat"
+scorers = [{{ name = "frf_db_rms", band = [60.0, 1900.0] }}]
+select = {{ threshold = 0.1, max_variables = 2 }}
+[[stages]]
+name = "doe"
+design = "full_factorial"
+variables = "selected:screen"
+scorers = [{{ name = "rms" }}]
+surrogates = ["eq18"]
+"""
+
+
+def test_a_diverging_run_is_recorded_and_the_study_completes(tmp_path):
+    study = tmp_path / "faulty.toml"
+    study.write_text(FAULTY.format(backend="serial"))
+    proc = sensfw("run", study, "--out", tmp_path / "o", "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    data, st = stages(tmp_path / "o" / "results.json")
+    assert data["runs"]["failed"] >= 1
+    assert "k1:max" in st["screen"]["failed"]
+    assert "diverged" in st["screen"]["failed"]["k1:max"]
+    assert any("failed" in n for n in st["screen"]["notes"])
+    assert st["screen"]["selected"]  # the analysis used the rest
+    assert "failed" in (tmp_path / "o" / "report.html").read_text()
+
+
+def test_eq18_matches_an_independent_statsmodels_formula_fit(quick):
+    import statsmodels.formula.api as smf
+
+    out, _ = quick
+    _data, st = stages(out / "results.json")
+    doe = st["doe"]
+    names = doe["variables"]
+    frame = pd.DataFrame([{n: r[n] for n in names} for r in doe["runs"]])
+    frame.columns = [f"x{i + 1}" for i in range(len(names))]
+    for label, reg in doe["regression"].items():
+        y = np.array([doe["scores"][label][r["label"]] for r in doe["runs"]])
+        d = frame.assign(y=y)
+        terms = list(d.columns[:-1])
+        inter = [f"{a}:{b}" for i, a in enumerate(terms) for b in terms[i + 1:]]
+        sq = [f"I({t}**2)" for t in terms]
+        fit = smf.ols("y ~ " + " + ".join(terms + inter + sq), data=d).fit()
+        ours = np.array([c["estimate"] for c in reg["coefficients"]])
+        # same term order: intercept, linear, interactions, squares
+        np.testing.assert_allclose(ours, fit.params.to_numpy(), rtol=1e-10,
+                                   atol=1e-10 * np.max(np.abs(fit.params)))
+        assert reg["r2"] == pytest.approx(fit.rsquared, rel=1e-10)
+        n, p = fit.nobs, len(fit.params) - 1
+        r2 = reg["r2"]
+        assert reg["r2_adj"] == pytest.approx(1 - (1 - r2) * (n - 1) / (n - p - 1), rel=1e-10)
+        assert reg["f_stat"] == pytest.approx((r2 / p) / ((1 - r2) / (n - p - 1)), rel=1e-8)
