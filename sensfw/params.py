@@ -76,6 +76,9 @@ class ParameterSet(Mapping[str, Parameter]):
                 f"unknown parameter {name!r}; known: {', '.join(self._p)}"
             ) from None
 
+    def __contains__(self, name: object) -> bool:
+        return name in self._p
+
     def __iter__(self):
         return iter(self._p)
 

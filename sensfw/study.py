@@ -167,6 +167,19 @@ class StudyFile(_Strict):
     stages: list[StageSpec] = Field(min_length=1)
 
 
+def _without(data: Any, locs: list[tuple]) -> Any:
+    """A deep copy of ``data`` without the entries at ``locs``."""
+    import copy
+
+    out = copy.deepcopy(data)
+    for loc in locs:
+        node = out
+        for part in loc[:-1]:
+            node = node[part]
+        node.pop(loc[-1], None)
+    return out
+
+
 def _path(loc: tuple) -> str:
     out = ""
     for part in loc:
@@ -202,6 +215,14 @@ class Study:
             spec = StudyFile.model_validate(data)
         except ValidationError as err:
             problems = [(_path(e["loc"]), e["msg"]) for e in err.errors()]
+            # unknown keys alone should not hide the other problems: drop them and check
+            # the rest, so that everything is reported at once
+            if all(e["type"] == "extra_forbidden" for e in err.errors()):
+                cleaned = _without(data, [e["loc"] for e in err.errors()])
+                try:
+                    cls(StudyFile.model_validate(cleaned), source)
+                except StudyError as more:
+                    problems += more.problems
             raise StudyError(problems, source) from None
         return cls(spec, source)
 
