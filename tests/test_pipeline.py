@@ -16,24 +16,9 @@ ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "studies" / "quick.toml"
 
 
-def sensfw(*args, timeout=300):
-    return subprocess.run([sys.executable, "-m", "sensfw", *map(str, args)],
-                          capture_output=True, text=True, timeout=timeout, cwd=ROOT)
-
-
 def stages(path):
     data = json.loads(Path(path).read_text())
     return data, {s["name"]: s for s in data["stages"]}
-
-
-@pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    out = tmp_path_factory.mktemp("quick")
-    t0 = time.perf_counter()
-    proc = sensfw("run", QUICK, "--out", out, "--workers", 2, "--no-progress")
-    wall = time.perf_counter() - t0
-    assert proc.returncode == 0, proc.stderr
-    return out, wall
 
 
 def test_quick_study_runs_the_three_steps(quick):
@@ -61,10 +46,10 @@ def test_quick_study_runs_the_three_steps(quick):
     assert html.count("data:image/png;base64") >= 6  # Figs. 7-11 analogues
 
 
-def test_rerun_computes_nothing_and_gives_identical_results(quick, tmp_path):
+def test_rerun_computes_nothing_and_gives_identical_results(quick, cli):
     out, _ = quick
     before = json.loads((out / "results.json").read_text())
-    proc = sensfw("run", QUICK, "--out", out, "--no-progress", "--no-report")
+    proc = cli("run", QUICK, "--out", out, "--no-progress", "--no-report")
     assert proc.returncode == 0, proc.stderr
     after = json.loads((out / "results.json").read_text())
     assert after["runs"]["new"] == 0
@@ -72,7 +57,7 @@ def test_rerun_computes_nothing_and_gives_identical_results(quick, tmp_path):
     assert after["stages"] == before["stages"]
 
 
-def test_killed_run_resumes_with_only_the_missing_runs(quick, tmp_path):
+def test_killed_run_resumes_with_only_the_missing_runs(quick, cli, tmp_path):
     ref, _ = quick
     out = tmp_path / "killed"
     proc = subprocess.Popen([sys.executable, "-m", "sensfw", "run", str(QUICK), "--out",
@@ -89,7 +74,7 @@ def test_killed_run_resumes_with_only_the_missing_runs(quick, tmp_path):
     proc.wait()
     done = len(list(store.glob("*.json")))
     assert done >= 6
-    again = sensfw("run", QUICK, "--out", out, "--no-progress", "--no-report")
+    again = cli("run", QUICK, "--out", out, "--no-progress", "--no-report")
     assert again.returncode == 0, again.stderr
     data, _ = stages(out / "results.json")
     assert data["runs"]["cached"] >= done - 2  # a record may have been torn by the kill
@@ -129,10 +114,10 @@ surrogates = ["eq18"]
 """
 
 
-def test_a_diverging_run_is_recorded_and_the_study_completes(tmp_path):
+def test_a_diverging_run_is_recorded_and_the_study_completes(cli, tmp_path):
     study = tmp_path / "faulty.toml"
     study.write_text(FAULTY.format(backend="serial"))
-    proc = sensfw("run", study, "--out", tmp_path / "o", "--no-progress")
+    proc = cli("run", study, "--out", tmp_path / "o", "--no-progress")
     assert proc.returncode == 0, proc.stderr
     data, st = stages(tmp_path / "o" / "results.json")
     assert data["runs"]["failed"] >= 1

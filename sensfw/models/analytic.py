@@ -117,7 +117,8 @@ class TwoDOF(Model):
 class FaultInjection(Model):
     """Another model with injected faults, for testing fault tolerance.
 
-    Options map a fault to a condition ``{"parameter": name, "above": value}``: ``diverge``
+    Options map a fault to a condition ``{"parameter": name, "above": value}`` (or
+    ``"below"``, or both: outside the interval): ``diverge``
     raises the model's divergence error, ``hang`` sleeps ``hang_seconds``, ``crash`` kills
     the worker process (``os._exit``). ``slow`` adds ``slow_seconds`` to every run.
     """
@@ -148,7 +149,10 @@ class FaultInjection(Model):
 
     def _hit(self, fault: str, p: Mapping[str, float]) -> bool:
         cond = self.faults[fault]
-        return bool(cond) and p[cond["parameter"]] > cond["above"]
+        if not cond:
+            return False
+        v = p[cond["parameter"]]
+        return v > cond.get("above", math.inf) or v < cond.get("below", -math.inf)
 
     def simulate(self, params, excitation: Chirp, solver: SolverSettings | None = None):
         p = self.parameters().complete(params)

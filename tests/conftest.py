@@ -1,0 +1,33 @@
+"""Shared fixtures: the quick study is run once per test session and reused."""
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK = ROOT / "studies" / "quick.toml"
+
+
+def run_cli(*args, timeout=300):
+    return subprocess.run([sys.executable, "-m", "sensfw", *map(str, args)],
+                          capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+
+
+@pytest.fixture(scope="session")
+def quick(tmp_path_factory):
+    """(output folder, wall seconds) of ``sensfw run studies/quick.toml`` (processes)."""
+    out = tmp_path_factory.mktemp("quick")
+    t0 = time.perf_counter()
+    proc = run_cli("run", QUICK, "--out", out, "--workers", 2, "--no-progress")
+    wall = time.perf_counter() - t0
+    assert proc.returncode == 0, proc.stderr
+    return out, wall
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """Run ``python -m sensfw ARGS`` from the repository root."""
+    return run_cli
