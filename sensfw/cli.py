@@ -145,8 +145,11 @@ def run(
     for st in data["stages"]:
         if "selected" in st:
             out.print(f"  {st['name']}: selected {', '.join(st['selected'])}")
-        for label, reg in st.get("regression", {}).items():
-            out.print(f"  {st['name']}: {label} R2adj={reg['r2_adj']:.3f} Q2={reg['q2']:.3f}")
+        for label, per in st.get("validation", {}).items():
+            for name, v in per.items():
+                adj = "n/a" if v.get("r2_adj") is None else f"{v['r2_adj']:.3f}"
+                out.print(f"  {st['name']}: {label} / {name}: R2adj={adj} "
+                          f"Q2(LOO)={v['q2_loo']:.3f}")
 
 
 @app.command()

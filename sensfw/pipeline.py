@@ -133,6 +133,14 @@ def _jsonable(x):
     return x
 
 
+def _init_params(name: str) -> set[str]:
+    import inspect
+
+    from .plugins import surrogates
+
+    return set(inspect.signature(surrogates.get(name)).parameters)
+
+
 def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd.DataFrame,
                    scores: pd.DataFrame, result: StageResult) -> None:
     """Fit every requested surrogate to every score; Eq. 18 statistics go to ``regression``,
@@ -150,12 +158,12 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
             continue
         result.surrogates[label] = {}
         result.validation[label] = {}
-        for name in stage.surrogates:
-            opts = dict(stage.surrogate_options.get(name, {}))
-            if name in ("eq18", "gaussian_process", "polynomial") and "bounds" not in opts:
+        for sur in stage.surrogates:
+            name, opts = sur.key, sur.options()
+            if "bounds" in _init_params(sur.name) and "bounds" not in opts:
                 opts["bounds"] = [bounds[n] for n in space.names]
             try:
-                est = make_surrogate(name, **opts).fit(X, y[ok])
+                est = make_surrogate(sur.name, **opts).fit(X, y[ok])
             except SensfwError as err:
                 result.notes.append(f"{label}/{name}: {err}")
                 continue
@@ -168,6 +176,7 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                     coefs = est.coefficients_
                 result.regression[label] = {
                     "surrogate": name,
+                    "options": {k: v for k, v in opts.items() if k != "bounds"},
                     **{k: summary.get(k) for k in ("r2", "r2_adj", "q2", "f_stat", "f_pvalue",
                                                    "n_obs")},
                     "coefficients": _jsonable(coefs[["term", "estimate", "se", "t", "p"]]),
@@ -292,7 +301,7 @@ def plan(study: Study) -> list[dict]:
             n_selected[stage.name] = stage.select.max_variables or k
         out.append({"stage": stage.name, "design": stage.design, "variables": note,
                     "n_runs": int(n), "scorers": [s.key for s in stage.scorers],
-                    "surrogates": list(stage.surrogates),
+                    "surrogates": [s.key for s in stage.surrogates],
                     "confirmation_runs": stage.confirmation_runs})
     return out
 

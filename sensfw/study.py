@@ -129,6 +129,21 @@ class ScorerSpec(BaseModel):
         return self.label or self.name
 
 
+class SurrogateSpec(BaseModel):
+    """A surrogate and its options; ``label`` names it in the results (default: its name)."""
+
+    model_config = ConfigDict(extra="allow")
+    name: str
+    label: str | None = None
+
+    def options(self) -> dict[str, Any]:
+        return dict(self.model_extra or {})
+
+    @property
+    def key(self) -> str:
+        return self.label or self.name
+
+
 class SelectSpec(_Strict):
     by: str | None = None  # scorer label; default: the stage's first scorer
     threshold: float = Field(default=0.10, ge=0.0)
@@ -144,9 +159,14 @@ class StageSpec(_Strict):
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
     scorers: list[ScorerSpec] = Field(min_length=1)
     select: SelectSpec | None = None
-    surrogates: list[str] = Field(default_factory=list)
-    surrogate_options: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    surrogates: list[SurrogateSpec] = Field(default_factory=list)
     confirmation_runs: int = Field(default=0, ge=0)
+
+    @field_validator("surrogates", mode="before")
+    @classmethod
+    def _surrogate_names(cls, v):
+        return [{"name": x} if isinstance(x, str) else x for x in v] if isinstance(v, list) \
+            else v
 
     @field_validator("variables")
     @classmethod
@@ -397,11 +417,16 @@ class Study:
                     problems.append((f"{where}.scorers[{j}].label",
                                      f"duplicate scorer label {sc.key!r}"))
                 labels.append(sc.key)
-            for j, name in enumerate(st.surrogates):
+            seen_sur = []
+            for j, sur in enumerate(st.surrogates):
                 try:
-                    surrogates.get(name)
+                    surrogates.get(sur.name)
                 except UnknownPluginError as err:
                     problems.append((f"{where}.surrogates[{j}]", str(err)))
+                if sur.key in seen_sur:
+                    problems.append((f"{where}.surrogates[{j}].label",
+                                     f"duplicate surrogate label {sur.key!r}"))
+                seen_sur.append(sur.key)
             if st.select is not None and st.select.by is not None and st.select.by not in labels:
                 problems.append((f"{where}.select.by", f"no scorer labelled {st.select.by!r} "
                                                        f"in this stage ({', '.join(labels)})"))

@@ -132,24 +132,36 @@ def test_eq18_matches_an_independent_statsmodels_formula_fit(quick):
     import statsmodels.formula.api as smf
 
     out, _ = quick
-    _data, st = stages(out / "results.json")
+    _, st = stages(out / "results.json")
     doe = st["doe"]
     names = doe["variables"]
-    frame = pd.DataFrame([{n: r[n] for n in names} for r in doe["runs"]])
-    frame.columns = [f"x{i + 1}" for i in range(len(names))]
+    phys = pd.DataFrame([{n: r[n] for n in names} for r in doe["runs"]])
+    phys.columns = [f"x{i + 1}" for i in range(len(names))]
+    # the full factorial spans each variable's bounds: code them to [-1, 1] as Eq18 does
+    coded = (phys - (phys.max() + phys.min()) / 2) / ((phys.max() - phys.min()) / 2)
+    terms = list(phys.columns)
+    inter = [f"{a}:{b}" for i, a in enumerate(terms) for b in terms[i + 1:]]
+    formula = "y ~ " + " + ".join(terms + inter + [f"I({t}**2)" for t in terms])
     for label, reg in doe["regression"].items():
         y = np.array([doe["scores"][label][r["label"]] for r in doe["runs"]])
-        d = frame.assign(y=y)
-        terms = list(d.columns[:-1])
-        inter = [f"{a}:{b}" for i, a in enumerate(terms) for b in terms[i + 1:]]
-        sq = [f"I({t}**2)" for t in terms]
-        fit = smf.ols("y ~ " + " + ".join(terms + inter + sq), data=d).fit()
-        ours = np.array([c["estimate"] for c in reg["coefficients"]])
+        fit = smf.ols(formula, data=coded.assign(y=y)).fit()
         # same term order: intercept, linear, interactions, squares
-        np.testing.assert_allclose(ours, fit.params.to_numpy(), rtol=1e-10,
-                                   atol=1e-10 * np.max(np.abs(fit.params)))
-        assert reg["r2"] == pytest.approx(fit.rsquared, rel=1e-10)
+        for key, col in (("estimate", fit.params), ("se", fit.bse), ("t", fit.tvalues),
+                         ("p", fit.pvalues)):
+            ours = np.array([c[key] for c in reg["coefficients_coded"]])
+            np.testing.assert_allclose(ours, col.to_numpy(), rtol=1e-10,
+                                       atol=1e-10 * np.max(np.abs(col)))
+        for key, ref in (("r2", fit.rsquared), ("r2_adj", fit.rsquared_adj),
+                         ("f_stat", fit.fvalue), ("f_pvalue", fit.f_pvalue)):
+            assert reg[key] == pytest.approx(ref, rel=1e-10), key
         n, p = fit.nobs, len(fit.params) - 1
         r2 = reg["r2"]
-        assert reg["r2_adj"] == pytest.approx(1 - (1 - r2) * (n - 1) / (n - p - 1), rel=1e-10)
-        assert reg["f_stat"] == pytest.approx((r2 / p) / ((1 - r2) / (n - p - 1)), rel=1e-8)
+        assert reg["r2_adj"] == pytest.approx(1 - (1 - r2) * (n - 1) / (n - p - 1), rel=1e-12)
+        assert reg["f_stat"] == pytest.approx((r2 / p) / ((1 - r2) / (n - p - 1)), rel=1e-10)
+        # physical-unit coefficients (Fig. 10b's units): the same model, so a direct fit on
+        # physical values agrees up to that fit's own ill-conditioning (x^2 ~ 1e13 here)
+        direct = smf.ols(formula, data=phys.assign(y=y)).fit()
+        ours = np.array([c["estimate"] for c in reg["coefficients"]])
+        np.testing.assert_allclose(ours, direct.params.to_numpy(), rtol=1e-6)
+        np.testing.assert_allclose(direct.fittedvalues, fit.fittedvalues, rtol=0,
+                                   atol=1e-8 * np.max(np.abs(y)))

@@ -59,14 +59,18 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
     resid = ya - fitted
     ss = float(np.sum((ya - ya.mean()) ** 2))
     summary = getattr(estimator, "summary_", {}) or {}
+    r2 = float(1 - np.sum(resid**2) / ss) if ss > 0 else float("nan")
+    # statistics on the scale of y (a surrogate may fit a transformed response)
+    same_scale = not getattr(estimator, "log_response", False)
+    p = summary.get("n_terms")
     out = {
         "n_obs": n,
-        "r2": float(1 - np.sum(resid**2) / ss) if ss > 0 else float("nan"),
-        "r2_adj": summary.get("r2_adj"),
+        "r2": r2,
+        "r2_adj": (1 - (1 - r2) * (n - 1) / (n - p)) if p and n > p else None,
         "rmse": float(np.sqrt(np.mean(resid**2))),
-        "f_stat": summary.get("f_stat"),
-        "f_pvalue": summary.get("f_pvalue"),
-        "q2_loo": summary.get("q2"),
+        "f_stat": summary.get("f_stat") if same_scale else None,
+        "f_pvalue": summary.get("f_pvalue") if same_scale else None,
+        "q2_loo": summary.get("q2") if same_scale else None,
         "q2_kfold": None,
         "fitted": fitted.tolist(),
         "residuals": resid.tolist(),

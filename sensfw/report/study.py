@@ -174,6 +174,18 @@ def spectrograms(result, stage, channel):
     return fig
 
 
+def validation_table(per: dict) -> pd.DataFrame:
+    rows = []
+    for name, v in per.items():
+        conf = v.get("confirmation") or {}
+        rows.append({"surrogate": name, "R²": v.get("r2"), "R²adj": v.get("r2_adj"),
+                     "Q² LOO": v.get("q2_loo"), "Q² k-fold": v.get("q2_kfold"),
+                     "RMSE": v.get("rmse"),
+                     "max VIF": max(v["vif"].values()) if v.get("vif") else None,
+                     "confirm RMSE": conf.get("rmse"), "PI coverage": conf.get("coverage")})
+    return pd.DataFrame(rows).set_index("surrogate").astype(float)
+
+
 def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
     frame = pd.DataFrame(reg["coefficients"]).set_index("term")
     sig = (frame["p"] < 0.05).fillna(False)
@@ -225,6 +237,10 @@ def write_study_report(result, path: str | Path) -> Path:
                 page.p("Highlighted: p < 0.05. Coefficients in physical units (Fig. 10b).",
                        "meta")
             for label, per in stage.validation.items():
+                page.h3(f"{label}: surrogates side by side (same {stage.table.shape[0]} runs)")
+                page.table(validation_table(per))
+                page.p("R²adj and Q² on the scale of the score; Q² from leave-one-out and "
+                       "5-fold refits; confirmation = new runs inside the bounds.", "meta")
                 for name in per:
                     page.figure(residual_plots(stage, label, name),
                                 f"{label} / {name}: residuals against fitted values, normal Q-Q.")

@@ -32,11 +32,38 @@ def _child(conn, spec: RunSpec) -> None:
     conn.close()
 
 
+_CHILD = ("import pickle, sys; from sensfw.runs.spec import execute; "
+          "sys.stdout.buffer.write(pickle.dumps(execute(pickle.loads(sys.stdin.buffer.read()))))")
+
+
+def _execute_subprocess(spec: RunSpec) -> RunResult:
+    """:func:`execute` in a fresh interpreter (for daemonic processes such as Dask workers,
+    which may not fork children), killed after ``spec.timeout`` seconds."""
+    import pickle
+    import subprocess
+    import sys
+
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run([sys.executable, "-c", _CHILD], input=pickle.dumps(spec),
+                              capture_output=True, timeout=spec.timeout)
+    except subprocess.TimeoutExpired:
+        return RunResult(spec.key(), False, error=f"timeout: no result after {spec.timeout:g} s",
+                         wall=time.perf_counter() - t0)
+    if proc.returncode != 0:
+        tail = proc.stderr.decode(errors="replace").strip().splitlines()[-1:] or [""]
+        return RunResult(spec.key(), False, wall=time.perf_counter() - t0,
+                         error=f"worker process died (exit code {proc.returncode}) {tail[0]}")
+    return pickle.loads(proc.stdout)
+
+
 def execute_guarded(spec: RunSpec) -> RunResult:
     """:func:`execute`, in a child process killed after ``spec.timeout`` seconds if set
     (a hung simulation cannot be interrupted from Python otherwise)."""
     if not spec.timeout:
         return execute(spec)
+    if mp.current_process().daemon:
+        return _execute_subprocess(spec)
     ctx = mp.get_context("spawn")
     recv, send = ctx.Pipe(duplex=False)
     proc = ctx.Process(target=_child, args=(send, spec), daemon=True)

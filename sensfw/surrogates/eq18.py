@@ -7,7 +7,15 @@ terms as ratios ``x_i / x_j`` while the paper's coefficient table (Fig. 10b) lis
 physical units only). By default the fit is made on coded variables in [-1, 1] (well
 conditioned); for the product form the physical-unit coefficients (the units of Fig. 10b)
 come from a fit of the same model on physical values, whose predictions are identical (the
-model space is invariant under an affine change of variables).
+model space is invariant under an affine change of variables); they are computed from the
+coded fit by that exact linear map (with its covariance), not by refitting an
+ill-conditioned physical design matrix.
+
+Factor-10 ranges (contact stiffness, stiction velocities, damping in Table 1) are often
+better described on a logarithmic scale: ``log_features="auto"`` regresses on ``log10(x)``
+for every variable whose range spans at least a factor 10 (or give a list of names), and
+``log_response=True`` fits ``log(y)`` (predictions are transformed back). Both are off by
+default, which is the paper's Eq. 18.
 """
 
 from __future__ import annotations
@@ -47,6 +55,32 @@ def _table(res, terms) -> pd.DataFrame:
                          "t": res.tvalues, "p": res.pvalues})
 
 
+def coded_to_physical(m: int, mid: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """Matrix T with ``beta_physical = T beta_coded`` for the product form of Eq. 18 when
+    ``z = (u - mid) / half``: substitute ``z_i = c_i u_i + d_i`` (``c = 1/half``,
+    ``d = -mid/half``) and collect the terms."""
+    c, d = 1.0 / half, -mid / half
+    pairs = list(combinations(range(m), 2))
+    n = 1 + 2 * m + len(pairs)
+    lin = {i: 1 + i for i in range(m)}
+    pair = {pq: 1 + m + k for k, pq in enumerate(pairs)}
+    sq = {i: 1 + m + len(pairs) + i for i in range(m)}
+    T = np.zeros((n, n))
+    T[0, 0] = 1.0
+    for i in range(m):
+        T[0, lin[i]] = d[i]
+        T[lin[i], lin[i]] = c[i]
+        T[0, sq[i]] = d[i] ** 2
+        T[lin[i], sq[i]] = 2 * c[i] * d[i]
+        T[sq[i], sq[i]] = c[i] ** 2
+    for (i, j), k in pair.items():
+        T[0, k] = d[i] * d[j]
+        T[lin[i], k] = c[i] * d[j]
+        T[lin[j], k] = c[j] * d[i]
+        T[k, k] = c[i] * c[j]
+    return T
+
+
 @surrogates.register("eq18")
 class Eq18(RegressorMixin, BaseEstimator):
     """Quadratic regression with pairwise interactions (Eq. 18).
@@ -65,10 +99,13 @@ class Eq18(RegressorMixin, BaseEstimator):
     ``result_`` (the statsmodels results).
     """
 
-    def __init__(self, interaction: str = "product", coding: str = "coded", bounds=None):
+    def __init__(self, interaction: str = "product", coding: str = "coded", bounds=None,
+                 log_features=None, log_response: bool = False):
         self.interaction = interaction
         self.coding = coding
         self.bounds = bounds
+        self.log_features = log_features
+        self.log_response = log_response
 
     def _check(self):
         if self.interaction not in ("product", "ratio"):
@@ -79,17 +116,55 @@ class Eq18(RegressorMixin, BaseEstimator):
             raise SurrogateError("Eq18: ratio terms x_i/x_j are only meaningful in physical "
                                  "units (coded values cross zero); use coding='physical'")
 
-    def _encode(self, X):
-        return (X - self.mid_) / self.half_ if self.coding == "coded" else X
+    def _logs(self, X: np.ndarray, names: list[str]) -> np.ndarray:
+        """Which columns are regressed on log10 (decided at fit)."""
+        lf = self.log_features
+        if lf is None:
+            return np.zeros(len(names), bool)
+        if isinstance(lf, str):
+            if lf != "auto":
+                raise SurrogateError("Eq18: log_features must be None, 'auto' or a list of "
+                                     "feature names")
+            lo, hi = (np.asarray(self.bounds, float).T if self.bounds is not None
+                      else (X.min(axis=0), X.max(axis=0)))
+            return (lo > 0) & (hi >= 10 * lo)
+        unknown = set(lf) - set(names)
+        if unknown:
+            raise SurrogateError(f"Eq18: log_features {sorted(unknown)} are not features "
+                                 f"({', '.join(names)})")
+        return np.array([n in lf for n in names])
+
+    def _features(self, X: np.ndarray) -> np.ndarray:
+        U = X.copy()
+        if self.log_mask_.any():
+            if np.any(X[:, self.log_mask_] <= 0):
+                raise SurrogateError("Eq18: log features need positive values")
+            U[:, self.log_mask_] = np.log10(X[:, self.log_mask_])
+        return U
+
+    def _encode(self, U):
+        return (U - self.mid_) / self.half_ if self.coding == "coded" else U
 
     def fit(self, X, y):
         import statsmodels.api as sm
 
         self._check()
         X, y = check_xy(self, X, y, fit=True)
+        if self.log_response:
+            if np.any(y <= 0):
+                raise SurrogateError("Eq18: log_response needs positive responses")
+            y = np.log(y)
         names = list(self.feature_names_in_)
-        self.mid_, self.half_ = scaling(self, X, self.bounds)
-        A, terms = design_matrix(self._encode(X), names, self.interaction)
+        self.log_mask_ = self._logs(X, names)
+        U = self._features(X)
+        bounds = None
+        if self.bounds is not None:
+            b = np.asarray(self.bounds, float)
+            bounds = np.where(self.log_mask_[:, None], np.log10(np.abs(b) + 1e-300), b)
+        self.mid_, self.half_ = scaling(self, U, bounds)
+        fnames = [f"log10({n})" if lg else n for n, lg in zip(names, self.log_mask_,
+                                                               strict=True)]
+        A, terms = design_matrix(self._encode(U), fnames, self.interaction)
         if len(y) <= A.shape[1]:
             raise SurrogateError(f"Eq18: {len(y)} runs cannot support {A.shape[1]} "
                                  f"coefficients (1 + 2m + m(m-1)/2 for m = {X.shape[1]})")
@@ -98,8 +173,16 @@ class Eq18(RegressorMixin, BaseEstimator):
         self.terms_ = terms
         self.coefficients_ = _table(res, terms)
         if self.coding == "coded" and self.interaction == "product":
-            Ap, _ = design_matrix(X, names, self.interaction)
-            self.coefficients_physical_ = _table(sm.OLS(y, Ap).fit(), terms)
+            from scipy import stats
+
+            T = coded_to_physical(X.shape[1], self.mid_, self.half_)
+            beta = T @ res.params
+            se = np.sqrt(np.maximum(np.diag(T @ res.cov_params() @ T.T), 0.0))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = beta / se
+            p = 2 * stats.t.sf(np.abs(t), res.df_resid)
+            self.coefficients_physical_ = pd.DataFrame({"term": terms, "estimate": beta,
+                                                        "se": se, "t": t, "p": p})
         else:
             self.coefficients_physical_ = self.coefficients_
         h = res.get_influence().hat_matrix_diag
@@ -117,13 +200,18 @@ class Eq18(RegressorMixin, BaseEstimator):
 
     def _matrix(self, X):
         X = check_xy(self, X)
-        A, _ = design_matrix(self._encode(X), list(self.feature_names_in_), self.interaction)
+        A, _ = design_matrix(self._encode(self._features(X)), list(self.feature_names_in_),
+                             self.interaction)
         return A
 
+    def _back(self, v):
+        return np.exp(v) if self.log_response else v
+
     def predict(self, X):
-        return self.result_.predict(self._matrix(X))
+        return self._back(self.result_.predict(self._matrix(X)))
 
     def predict_interval(self, X, alpha: float = 0.05):
         """(lower, upper) (1 - alpha) prediction intervals for new observations."""
         frame = self.result_.get_prediction(self._matrix(X)).summary_frame(alpha=alpha)
-        return frame["obs_ci_lower"].to_numpy(), frame["obs_ci_upper"].to_numpy()
+        return (self._back(frame["obs_ci_lower"].to_numpy()),
+                self._back(frame["obs_ci_upper"].to_numpy()))
