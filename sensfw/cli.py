@@ -188,6 +188,174 @@ def simulate(
               f"{info['amplitude']:g} N, noise {noise:g})")
 
 
+def _measured_runner(study, out_dir: Path, workers, backend, scheduler, progress):
+    out_dir.mkdir(parents=True, exist_ok=True)
+    return _runner(study, out_dir, workers, backend, scheduler, progress=progress)
+
+
+def _json(path: Path, data) -> None:
+    from .pipeline import _jsonable
+
+    path.write_text(json.dumps(_jsonable(data), indent=1))
+
+
+Measured = Annotated[list[Path], typer.Option("--measured", "-m",
+                                              help="measurement file(s) (.csv or .uff)")]
+
+
+@app.command()
+@_user_errors
+def compare(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
+    workers: Annotated[int | None, typer.Option()] = None,
+    backend: Annotated[str | None, typer.Option()] = None,
+    scheduler: Annotated[str | None, typer.Option()] = None,
+    progress: Annotated[bool, typer.Option()] = True,
+) -> None:
+    """See where the model fails: FRF error per band, resonances, harmonics, THD, levels."""
+    from .measure.compare import amplitude_dependence, compare_level
+    from .measure.session import Variant, load_measurements, simulate
+    from .report.measure import write_compare_report
+    from .study import Study
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
+    try:
+        sims = simulate(study, runner, [Variant()], [m.level for m in meas])
+    finally:
+        runner.progress.close()
+        runner.close()
+    comparisons, pairs, notes = [], [], []
+    ex = study.excitation
+    for m in meas:
+        notes += [f"{m.file}: {n}" for n in m.notes]
+        sig = sims[(Variant(), m.level)]
+        if sig is None:
+            raise SensfwError(f"the model failed at level {m.level:g} N (see {out_dir}/runs)")
+        comparisons.append(compare_level(m.signals, sig, study.output, (ex.f0, ex.f1), m.level,
+                                         m.file))
+        pairs.append((m.level, m.signals, sig))
+    amp = amplitude_dependence(comparisons)
+    _json(out_dir / "compare.json", {"study": study.name, "output": study.output,
+                                     "levels": [c.to_dict() for c in comparisons],
+                                     "amplitude_dependence": amp, "notes": notes})
+    write_compare_report(study, comparisons, pairs, amp, notes, out_dir / "report.html")
+    for c in comparisons:
+        out.print(f"level {c.level:.3g} N: FRF error {c.frf_rms_db:.2f} dB RMS; THD model "
+                  f"{c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %")
+    if amp:
+        for line in amp["summary"]:
+            out.print("  " + line)
+    out.print(f"-> {out_dir}/compare.json, {out_dir}/report.html")
+
+
+@app.command()
+@_user_errors
+def diagnose(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/diagnose"),
+    candidates: Annotated[str | None, typer.Option(
+        help="comma-separated effect names (default: every registered effect)")] = None,
+    workers: Annotated[int | None, typer.Option()] = None,
+    backend: Annotated[str | None, typer.Option()] = None,
+    scheduler: Annotated[str | None, typer.Option()] = None,
+    progress: Annotated[bool, typer.Option()] = True,
+) -> None:
+    """Which physical effect does the model lack? Calibrate each candidate, rank by BIC."""
+    from .measure.diagnose import Evaluator
+    from .measure.diagnose import diagnose as run_diagnose
+    from .measure.session import Variant, load_measurements
+    from .report.measure import write_diagnose_report
+    from .study import Study
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
+    t0 = time.perf_counter()
+    try:
+        names = [c.strip() for c in candidates.split(",")] if candidates else None
+        result = run_diagnose(study, meas, runner, names,
+                              log=lambda s: console.print(f"[cyan]{s}"))
+        ev = Evaluator(study, meas, runner)
+        base_cmp = ev.comparisons([Variant()], "baseline")[0]
+        best_cmp = None
+        if result["ranking"]:
+            top = result["ranking"][0]
+            best_cmp = ev.comparisons([Variant.of([{"name": top["effect"],
+                                                     "attach": top["attach"]}],
+                                                   top["params"])], "best")[0]
+    finally:
+        runner.progress.close()
+        runner.close()
+    result["wall_s"] = time.perf_counter() - t0
+    _json(out_dir / "diagnose.json", result)
+    write_diagnose_report(study, result, base_cmp, best_cmp, out_dir / "report.html")
+    out.print(f"verdict: {result['verdict']}  ({result['n_simulations']} simulations, "
+              f"{result['wall_s']:.0f} s)")
+    for r in result["ranking"][:5]:
+        out.print(f"  {r['effect']:18s} error {r['error_before']:.3f} -> {r['error_after']:.3f}"
+                  f" dB, dBIC {r['delta_bic']:+.1f}")
+    out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
+
+
+@app.command()
+@_user_errors
+def augment(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    effect: Annotated[str, typer.Option(help="effect to add, NAME[@ATTACH]")],
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
+    workers: Annotated[int | None, typer.Option()] = None,
+    backend: Annotated[str | None, typer.Option()] = None,
+    scheduler: Annotated[str | None, typer.Option()] = None,
+    progress: Annotated[bool, typer.Option()] = True,
+) -> None:
+    """Add a physical effect, calibrate it, write the augmented study and the error path."""
+    import tomllib
+
+    from .measure.diagnose import augment as run_augment
+    from .measure.session import load_measurements
+    from .plugins import effects
+    from .report.measure import write_augment_report
+    from .study import Study
+    from .tomlw import dumps
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    name, _, attach = effect.partition("@")
+    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
+    try:
+        result = run_augment(study, meas, runner, name, attach or None,
+                             log=lambda s: console.print(f"[cyan]{s}"))
+    finally:
+        runner.progress.close()
+        runner.close()
+    data = tomllib.loads(study_file.read_text())
+    model = data.setdefault("model", {})
+    opts = model.setdefault("options", {})
+    opts["effects"] = [*opts.get("effects", []), {"name": name, "attach": result["attach"]}]
+    params = data.setdefault("parameters", {})
+    declared = {p.name: p for p in effects.get(name)().parameters()}
+    for k, v in result["params"].items():
+        p = declared[k]
+        params[k] = {"min": p.min, "nominal": float(v), "max": p.max}
+    data.setdefault("study", {})["description"] = (
+        data["study"].get("description", "") + f" [augmented with {name}, calibrated against "
+        f"{', '.join(m.file for m in meas)}]").strip()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "study.toml").write_text(dumps(data))
+    Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
+    _json(out_dir / "augment.json", result)
+    write_augment_report(study, result, out_dir / "report.html")
+    for t in result["trajectory"]:
+        out.print(f"  {t['step']:13s} error {t['error']:.3f} dB")
+    out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
+
+
 @app.command()
 @_user_errors
 def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]) -> None:

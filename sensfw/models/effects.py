@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -33,6 +34,8 @@ class Effect:
     attach_points: tuple[str, ...] = ()
     signatures: tuple[str, ...] = ()
     description: str = ""
+    #: calibration design: values per parameter (default 5 for one parameter, 3 for two)
+    design_levels: ClassVar[dict[str, int]] = {}
 
     def __init__(self, attach: str | None = None):
         attach = attach or self.attach_points[0]
@@ -52,6 +55,11 @@ class Effect:
 
     def initial_guess(self, layout, guess: np.ndarray) -> None:
         """Start values of added coordinates for the static equilibrium (default 0)."""
+
+    def seeds(self, comparisons) -> list[dict[str, float]]:
+        """Parameter values suggested by the evidence of a model/measurement comparison
+        (added to the calibration design); none by default."""
+        return []
 
     def spec(self) -> dict:
         return {"name": self.name, "attach": self.attach}
@@ -207,6 +215,7 @@ class FlexibleMode(Effect):
     attach_points = ("crankshaft",)
     signatures = ("a new resonance peak", "no new harmonics")
     modal_mass = 0.03  # kg
+    design_levels: ClassVar[dict[str, int]] = {"flex_frequency": 7, "flex_damping": 2}
 
     def parameters(self):
         return [Parameter("flex_frequency", "Hz", 2500.0, 600.0, 4500.0, "modal frequency",
@@ -236,3 +245,17 @@ class FlexibleMode(Effect):
     def initial_guess(self, layout, guess):
         i, j = layout.offset["F"], layout.offset["C"]
         guess[i:i + 2] = guess[j:j + 2]
+
+    def seeds(self, comparisons):
+        """A measured resonance the model does not have is where the missing mode is."""
+        out = []
+        lo, hi = 600.0, 4500.0
+        for c in comparisons[:1]:
+            for r in c.resonances:
+                f = r.get("measured_hz")
+                if r.get("model_hz") is None and f and lo <= f <= hi:
+                    zeta = float(np.clip(r.get("measured_damping") or 0.02, 0.003, 0.08))
+                    # the coupled peak sits above the uncoupled modal frequency
+                    out += [{"flex_frequency": float(np.clip(f * s, lo, hi)),
+                             "flex_damping": zeta} for s in (0.8, 0.9, 1.0)]
+        return out[:6]

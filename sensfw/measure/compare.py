@@ -1,0 +1,237 @@
+"""Model against measurement: where and how they differ ("see where it fails").
+
+For one excitation level: FRF error in dB (overall RMS and per one-third-octave band),
+a resonance table (model vs measured frequency, shift, half-power damping ratio), a harmonic
+table (order amplitudes, dB difference) and THD. For several levels: how resonance
+frequencies and THD move with level, measured and simulated (amplitude dependence is the
+fingerprint of contact nonlinearity).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.signal import find_peaks
+
+from ..models.base import Signals
+from ..signal import frf, harmonic_amplitudes, octave_smooth
+
+#: FRF settings of every comparison: Hv over the whole record, smoothed for the metrics
+SMOOTH = 24  # 1/24 octave
+
+
+def third_octave_bands(fmin: float, fmax: float) -> list[tuple[float, float, float]]:
+    """(lower, centre, upper) of the base-10 one-third-octave bands (IEC 61260) inside
+    ``[fmin, fmax]``."""
+    out = []
+    for n in range(-20, 60):
+        c = 1000.0 * 10 ** (n / 10)
+        lo, hi = c / 10 ** 0.05, c * 10 ** 0.05
+        if lo >= fmin and hi <= fmax:
+            out.append((lo, c, hi))
+    return out
+
+
+def frf_db(sig: Signals, channel: str, band: tuple[float, float], smooth: int = SMOOTH):
+    """(f, dB magnitude) of the Hv FRF, 1/``smooth``-octave smoothed, inside ``band``."""
+    f, H = frf(sig.force, sig.channel(channel), sig.fs, estimator="Hv")
+    mag = octave_smooth(f, H, smooth)
+    sel = (f >= band[0]) & (f <= band[1]) & (mag > 0)
+    return f[sel], 20 * np.log10(mag[sel])
+
+
+def band_frf_db(sig: Signals, channel: str, bands) -> np.ndarray:
+    """dB magnitude of the FRF averaged coherently over each band,
+    ``H_b = sum_b conj(P) X / sum_b |P|^2`` (H1 over the band's bins): noise averages down
+    with the number of bins while the swept signal adds up."""
+    P = np.fft.rfft(sig.force)
+    X = np.fft.rfft(sig.channel(channel))
+    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    out = []
+    for lo, _, hi in bands:
+        sel = (f >= lo) & (f < hi)
+        num = np.sum(np.conj(P[sel]) * X[sel])
+        den = np.sum(np.abs(P[sel]) ** 2)
+        out.append(20 * np.log10(np.abs(num / den)) if den > 0 and num != 0 else np.nan)
+    return np.array(out)
+
+
+def resonances(f: np.ndarray, db: np.ndarray, prominence: float = 6.0,
+               dynamic_range: float = 30.0) -> list[dict]:
+    """Peaks of a (smoothed) FRF magnitude with their half-power damping ratio
+    ``zeta = (f2 - f1) / (2 fn)`` from the -3 dB crossings. Peaks more than
+    ``dynamic_range`` dB below the highest one are ignored (noise ripple where the response
+    is weak)."""
+    peaks, props = find_peaks(db, prominence=prominence)
+    keep = db[peaks] >= np.max(db) - dynamic_range
+    peaks, proms = peaks[keep], props["prominences"][keep]
+    out = []
+    for i, prom in zip(peaks, proms, strict=True):
+        target = db[i] - 3.0
+        lo = i
+        while lo > 0 and db[lo] > target:
+            lo -= 1
+        hi = i
+        while hi < len(db) - 1 and db[hi] > target:
+            hi += 1
+        zeta = None
+        if db[lo] <= target and db[hi] <= target:
+            f1 = np.interp(target, [db[lo], db[lo + 1]], [f[lo], f[lo + 1]])
+            f2 = np.interp(target, [db[hi], db[hi - 1]], [f[hi], f[hi - 1]])
+            zeta = float((f2 - f1) / (2 * f[i]))
+        out.append({"frequency": float(f[i]), "peak_db": float(db[i]),
+                    "prominence_db": float(prom), "damping_ratio": zeta})
+    return out
+
+
+def match_resonances(model: list[dict], measured: list[dict], tol: float = 0.25) -> list[dict]:
+    """Pair each measured resonance with the nearest model resonance within ``tol``
+    (relative); unmatched ones are listed with the other side empty (a missing or an extra
+    mode)."""
+    rows, used = [], set()
+    for m in measured:
+        best, dist = None, tol
+        for j, s in enumerate(model):
+            d = abs(np.log(s["frequency"] / m["frequency"]))
+            if j not in used and d < dist:
+                best, dist = j, d
+        if best is None:
+            rows.append({"measured_hz": m["frequency"], "model_hz": None, "shift_pct": None,
+                         "measured_damping": m["damping_ratio"], "model_damping": None,
+                         "note": "no model resonance nearby (missing mode?)"})
+        else:
+            used.add(best)
+            s = model[best]
+            rows.append({"measured_hz": m["frequency"], "model_hz": s["frequency"],
+                         "shift_pct": 100 * (s["frequency"] / m["frequency"] - 1),
+                         "measured_damping": m["damping_ratio"],
+                         "model_damping": s["damping_ratio"], "note": ""})
+    for j, s in enumerate(model):
+        if j not in used:
+            rows.append({"measured_hz": None, "model_hz": s["frequency"], "shift_pct": None,
+                         "measured_damping": None, "model_damping": s["damping_ratio"],
+                         "note": "not in the measurement (extra model mode?)"})
+    return sorted(rows, key=lambda r: r["measured_hz"] or r["model_hz"])
+
+
+def harmonics(sig: Signals, channel: str) -> dict[int, float]:
+    s = sig.sweep()
+    return harmonic_amplitudes(s.channel(channel), s.fs, s.f_inst)
+
+
+@dataclass
+class LevelComparison:
+    """Model against measurement at one excitation level."""
+
+    level: float
+    file: str
+    f: np.ndarray
+    db_model: np.ndarray
+    db_measured: np.ndarray
+    bands: list[dict]
+    resonances: list[dict]
+    harmonics: list[dict]
+    thd_model: float
+    thd_measured: float
+    notes: list[str] = field(default_factory=list)
+
+    dynamic_range: float = 35.0
+
+    @property
+    def used_bands(self) -> list[dict]:
+        """Bands within ``dynamic_range`` dB of the strongest measured band (weaker ones are
+        noise-limited on a shaker rig)."""
+        top = max(b["measured_db"] for b in self.bands)
+        return [b for b in self.bands if b["measured_db"] >= top - self.dynamic_range]
+
+    @property
+    def frf_rms_db(self) -> float:
+        """RMS of the band errors within the dynamic range."""
+        return float(np.sqrt(np.mean([b["mean_db"] ** 2 for b in self.used_bands])))
+
+    def to_dict(self) -> dict:
+        used = {b["centre_hz"] for b in self.used_bands}
+        bands = [{**b, "used": b["centre_hz"] in used} for b in self.bands]
+        return {"level": self.level, "file": self.file,
+                "frf_error_db": {"rms": self.frf_rms_db, "dynamic_range_db": self.dynamic_range,
+                                 "rms_all_bands": float(np.sqrt(np.mean(
+                                     [b["mean_db"] ** 2 for b in self.bands]))),
+                                 "bands": bands},
+                "resonances": self.resonances, "harmonics": self.harmonics,
+                "thd": {"model": self.thd_model, "measured": self.thd_measured,
+                        "difference_db": 20 * np.log10(self.thd_model / self.thd_measured)
+                        if self.thd_model > 0 and self.thd_measured > 0 else None},
+                "notes": self.notes}
+
+
+def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[float, float],
+                  level: float, file: str = "") -> LevelComparison:
+    f, dbm = frf_db(model, channel, band)
+    f2, dbx = frf_db(measured, channel, band)
+    if len(f) != len(f2) or not np.allclose(f, f2):
+        raise ValueError("model and measurement have different frequency axes; align first")
+    bands = []
+    edges = third_octave_bands(*band)
+    bm, bx = band_frf_db(model, channel, edges), band_frf_db(measured, channel, edges)
+    for (lo, c, hi), a, b in zip(edges, bm, bx, strict=True):
+        sel = (f >= lo) & (f < hi)
+        if sel.sum() == 0 or not (np.isfinite(a) and np.isfinite(b)):
+            continue
+        d = dbm[sel] - dbx[sel]
+        bands.append({"centre_hz": c, "lower_hz": lo, "upper_hz": hi,
+                      "model_db": float(a), "measured_db": float(b),
+                      "mean_db": float(a - b), "rms_db": float(np.sqrt(np.mean(d**2)))})
+    res = match_resonances(resonances(f, dbm), resonances(f, dbx))
+    hm, hx = harmonics(model, channel), harmonics(measured, channel)
+    rows = []
+    for k in sorted(set(hm) & set(hx)):
+        rows.append({"order": k, "model": hm[k], "measured": hx[k],
+                     "difference_db": float(20 * np.log10(hm[k] / hx[k]))
+                     if hm[k] > 0 and hx[k] > 0 else None})
+
+    def thd(h):
+        return 100 * np.sqrt(sum(v**2 for k, v in h.items() if k >= 2)) / h[1] if h.get(1) \
+            else float("nan")
+
+    return LevelComparison(level=level, file=file, f=f, db_model=dbm, db_measured=dbx,
+                           bands=bands, resonances=res, harmonics=rows, thd_model=thd(hm),
+                           thd_measured=thd(hx))
+
+
+def amplitude_dependence(levels: list[LevelComparison]) -> dict | None:
+    """How the main resonances and THD move from the lowest to the highest level."""
+    if len(levels) < 2:
+        return None
+    lo, hi = min(levels, key=lambda c: c.level), max(levels, key=lambda c: c.level)
+
+    def main_peaks(c: LevelComparison, which: str):
+        db = c.db_measured if which == "measured" else c.db_model
+        return sorted(resonances(c.f, db), key=lambda r: -r["prominence_db"])[:4]
+
+    shifts = {}
+    for which in ("measured", "model"):
+        pl, ph = main_peaks(lo, which), main_peaks(hi, which)
+        pairs = []
+        for a in pl:
+            near = [b for b in ph if abs(np.log(b["frequency"] / a["frequency"])) < 0.1]
+            if near:
+                b = min(near, key=lambda b: abs(b["frequency"] - a["frequency"]))
+                pairs.append({"low_level_hz": a["frequency"], "high_level_hz": b["frequency"],
+                              "shift_pct": 100 * (b["frequency"] / a["frequency"] - 1)})
+        shifts[which] = pairs
+    thd_ratio = {"measured": hi.thd_measured / lo.thd_measured if lo.thd_measured else None,
+                 "model": hi.thd_model / lo.thd_model if lo.thd_model else None}
+    level_ratio = hi.level / lo.level
+    measured_shift = max((abs(p["shift_pct"]) for p in shifts["measured"]), default=0.0)
+    verdict = []
+    if thd_ratio["measured"] and thd_ratio["measured"] > 1.3:
+        verdict.append(f"measured THD grows {thd_ratio['measured']:.2f}x for a "
+                       f"{level_ratio:.2f}x level: nonlinear")
+    if measured_shift > 1.0:
+        verdict.append(f"measured resonances move by up to {measured_shift:.1f} % with level: "
+                       "amplitude-dependent stiffness (contact, clearance, friction)")
+    if not verdict:
+        verdict.append("the measurement scales linearly between the levels")
+    return {"levels": [lo.level, hi.level], "resonance_shifts": shifts,
+            "thd_ratio": thd_ratio, "summary": verdict}
