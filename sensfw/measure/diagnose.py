@@ -220,8 +220,11 @@ def evidence(effect_cls, before, after) -> list[str]:
 
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
              candidates: Sequence[str] | None = None, min_delta_bic: float = 10.0,
-             min_reduction: float = 0.3, log=lambda s: None) -> dict:
-    """Rank the candidate effects (all registered ones by default); see module docstring."""
+             min_reduction: float = 0.3, refine_top: int = 3, refine_iterations: int = 5,
+             log=lambda s: None) -> dict:
+    """Rank the candidate effects (all registered ones by default); see module docstring.
+    The ``refine_top`` best candidates after the surrogate stage get a local search of
+    ``refine_iterations`` compass steps before the final ranking."""
     ev = Evaluator(study, measurements, runner)
     names = list(candidates) if candidates else effect_registry.names()
     base_cmp = ev.comparisons([Variant()], "baseline")[0]
@@ -230,30 +233,39 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
                           "compare")
     base_vec = discrepancy(base_cmp)
     bic0 = bic(base_vec, 0)
-    rows, cands = [], {}
+    cands: dict[tuple[str, str], tuple] = {}
     for name in names:
         cls = effect_registry.get(name)
         for attach in cls.attach_points:
             log(f"candidate {name}@{attach}")
             eff = cls(attach=attach)
-            spec = eff.spec()
-            cand = calibrate(ev, spec, eff.parameters(), f"{name}",
+            cand = calibrate(ev, eff.spec(), eff.parameters(), f"{name}",
                              seeds=eff.seeds(base_cmp), levels=eff.design_levels)
-            best = cand.best()
-            if best.vector is None:
-                continue
-            after_cmp = ev.comparisons([Variant.of([spec], best.values)],
-                                       f"{name} confirm")[0]
-            k = len(cand.params)
-            score = bic(best.vector, k)
-            rows.append({
-                "effect": name, "attach": attach, "params": best.values,
-                "error_before": rms(base_vec), "error_after": best.error,
-                "reduction": 1 - best.error / rms(base_vec) if rms(base_vec) > 0 else 0.0,
-                "score": score, "delta_bic": bic0 - score, "n_params": k,
-                "evidence": evidence(cls, base_cmp, after_cmp),
-            })
-            cands[(name, attach)] = cand
+            cands[(name, attach)] = (cls, eff, cand)
+    # second round for the most promising: a local search on simulations, so that a
+    # narrow valley missed by the small design does not decide the ranking
+    ranked = sorted(cands.values(), key=lambda c: c[2].best().error)
+    for _, eff, cand in ranked[:refine_top]:
+        log(f"refining {eff.name}@{eff.attach}")
+        refine_local(ev, cand, eff.spec(), eff.parameters(), f"{eff.name} refine",
+                     max_iter=refine_iterations)
+    rows = []
+    for (name, attach), (cls, eff, cand) in cands.items():
+        best = cand.best()
+        if best.vector is None:
+            continue
+        spec = eff.spec()
+        after_cmp = ev.comparisons([Variant.of([spec], best.values)], f"{name} confirm")[0]
+        k = len(cand.params)
+        score = bic(best.vector, k)
+        rows.append({
+            "effect": name, "attach": attach, "params": best.values,
+            "error_before": rms(base_vec), "error_after": best.error,
+            "reduction": 1 - best.error / rms(base_vec) if rms(base_vec) > 0 else 0.0,
+            "score": score, "delta_bic": bic0 - score, "n_params": k,
+            "n_evaluations": len(cand.evaluations),
+            "evidence": evidence(cls, base_cmp, after_cmp),
+        })
     rows.sort(key=lambda r: r["score"])
     top = rows[0] if rows else None
     verdict = "none"

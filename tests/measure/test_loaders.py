@@ -1,0 +1,143 @@
+"""Measurement files: every loader error names the file and the channel (issue 6)."""
+
+import numpy as np
+import pytest
+
+from sensfw.errors import MeasurementError
+from sensfw.excitation import Chirp
+from sensfw.measure.checks import align, estimate_sweep, prepare
+from sensfw.measure.io import load, write_csv
+from sensfw.models.analytic import TwoDOF
+from sensfw.models.base import Signals
+
+EX = Chirp(50, 2000, 0.3, 20000, 1.0, tail=0.05)
+
+
+@pytest.fixture(scope="module")
+def good():
+    m = TwoDOF()
+    s = m.simulate(m.parameters().nominal(), EX)
+    return Signals(t=s.t, force=s.force, channels={"a1": s.channels["a1"]}, fs=s.fs)
+
+
+def csv(tmp_path, sig, name="m.csv", **kw):
+    return write_csv(tmp_path / name, sig, **kw)
+
+
+def test_roundtrip_units_and_sidecar(tmp_path, good):
+    f = csv(tmp_path, good, level=1.0)
+    m = load(f)
+    assert m.level == 1.0 and m.fs == pytest.approx(20000)
+    np.testing.assert_allclose(m.signals.channels["a1"], good.channels["a1"], rtol=1e-9,
+                               atol=1e-12)
+    # accelerations in g in the header are converted to m/s^2
+    text = f.read_text().replace("a1 [m/s^2]", "a1 [g]")
+    g = tmp_path / "g.csv"
+    g.write_text(text)
+    assert load(g).signals.channels["a1"][100] == pytest.approx(
+        good.channels["a1"][100] * 9.80665, rel=1e-8)
+
+
+def test_nan_names_file_and_channel(tmp_path, good):
+    x = good.channels["a1"].copy()
+    x[123] = np.nan
+    bad = Signals(t=good.t, force=good.force, channels={"a1": x}, fs=good.fs)
+    f = csv(tmp_path, bad)
+    with pytest.raises(MeasurementError, match=r"m\.csv, channel 'a1': 1 NaN/inf value"):
+        load(f)
+
+
+def test_non_uniform_sampling(tmp_path, good):
+    t = good.t.copy()
+    t[500:] += 1e-5
+    f = csv(tmp_path, Signals(t=t, force=good.force, channels=good.channels, fs=good.fs))
+    with pytest.raises(MeasurementError, match=r"m\.csv, channel 'time': non-uniform"):
+        load(f)
+
+
+def test_declared_rate_disagrees(tmp_path, good):
+    f = csv(tmp_path, good)
+    f.with_suffix(".toml").write_text("fs = 10000.0\n")
+    with pytest.raises(MeasurementError, match=r"channel 'time': sample rate .* 20000 Hz but "
+                                               r"the sidecar declares fs = 10000"):
+        load(f)
+
+
+def test_missing_or_misnamed_channel(tmp_path, good):
+    f = csv(tmp_path, good)
+    with pytest.raises(MeasurementError, match=r"m\.csv, channel 'a2': missing channel"):
+        prepare(load(f), EX, ["a2"])
+    ren = Signals(t=good.t, force=good.force, channels={"crank_axal": good.channels["a1"]},
+                  fs=good.fs)
+    g = csv(tmp_path, ren, "r.csv")
+    with pytest.raises(MeasurementError, match=r"channel 'crank_axial'.*did you mean "
+                                               r"'crank_axal'"):
+        prepare(load(g), EX, ["crank_axial"])
+
+
+def test_clipping(tmp_path, good):
+    x = np.clip(good.channels["a1"], -0.5 * np.max(np.abs(good.channels["a1"])),
+                0.5 * np.max(np.abs(good.channels["a1"])))
+    f = csv(tmp_path, Signals(t=good.t, force=good.force, channels={"a1": x}, fs=good.fs))
+    with pytest.raises(MeasurementError, match=r"m\.csv, channel 'a1': clipped"):
+        prepare(load(f), EX, ["a1"])
+
+
+def test_record_shorter_than_the_chirp(tmp_path, good):
+    n = 4000  # 0.2 s of a 0.3 s chirp
+    short = Signals(t=good.t[:n], force=good.force[:n], channels={"a1": good.channels["a1"][:n]},
+                    fs=good.fs)
+    f = csv(tmp_path, short)
+    with pytest.raises(MeasurementError, match=r"channel 'force': record is 0\.2 s long, "
+                                               r"shorter than the 0\.3 s chirp"):
+        prepare(load(f), EX, ["a1"])
+
+
+def test_force_that_is_not_the_studys_chirp(tmp_path, good):
+    other = Chirp(100, 1000, 0.3, 20000, 1.0, tail=0.05)
+    sig = Signals(t=good.t, force=other.force(), channels=good.channels, fs=good.fs)
+    f = csv(tmp_path, sig)
+    with pytest.raises(MeasurementError, match=r"channel 'force': force does not look like the "
+                                               r"study's chirp .* estimated f0 = 1\d\d(\.\d+)? Hz"
+                                               r", f1 = (9\d\d|10\d\d)(\.\d+)? Hz"):
+        prepare(load(f), EX, ["a1"])
+
+
+def test_sweep_estimate_and_alignment(good):
+    f0, f1, dur = estimate_sweep(good.force, good.fs)
+    assert f0 == pytest.approx(50, rel=0.05) and f1 == pytest.approx(2000, rel=0.05)
+    assert dur == pytest.approx(0.3, rel=0.02)
+    from sensfw.measure.io import Measurement
+
+    d = 23  # samples of delay
+    late = Signals(t=good.t, force=np.concatenate([np.zeros(d), good.force[:-d]]),
+                   channels={"a1": np.concatenate([np.zeros(d), good.channels["a1"][:-d]])},
+                   fs=good.fs)
+    out = align(Measurement("x.csv", late), EX)
+    assert out.signals.meta["delay_s"] == pytest.approx(d / good.fs, abs=0.2 / good.fs)
+    np.testing.assert_allclose(out.signals.force[: len(good.force) - d],
+                               good.force[: len(good.force) - d], atol=1e-9)
+    # a different rate is resampled to the study's
+    half = Signals(t=good.t[::2], force=good.force[::2],
+                   channels={"a1": good.channels["a1"][::2]}, fs=good.fs / 2)
+    res = align(Measurement("y.csv", half), Chirp(50, 2000, 0.3, 20000, 1.0, tail=0.05))
+    assert res.signals.fs == 20000 and len(res.signals.force) == EX.n_samples
+    assert any("resampled" in n for n in res.notes)
+
+
+def test_uff58_roundtrip(tmp_path, good):
+    import pyuff
+
+    f = tmp_path / "m.uff"
+    uff = pyuff.UFF(str(f))
+    for name, y, unit in (("force", good.force, "N"), ("a1", good.channels["a1"], "m/s^2")):
+        uff.write_sets(pyuff.prepare_58(
+            func_type=1, id1=name, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1, data=y,
+            x=good.t, abscissa_spacing=1, abscissa_min=0.0, abscissa_inc=1 / good.fs,
+            abscissa_spec_data_type=17, ordinate_spec_data_type=12 if name == "a1" else 13,
+            orddenom_spec_data_type=13, ordinate_axis_units_lab=unit, binary=0), mode="add")
+    m = load(f)
+    assert m.fs == pytest.approx(good.fs, rel=1e-6)
+    np.testing.assert_allclose(m.signals.channels["a1"], good.channels["a1"], rtol=1e-5,
+                               atol=1e-9)
+    np.testing.assert_allclose(m.signals.force, good.force, rtol=1e-5, atol=1e-9)
