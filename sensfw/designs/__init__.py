@@ -1,7 +1,15 @@
 """Designs of experiments (plugin group ``sensfw.designs``): run tables and their analyses."""
 
 from ..plugins import designs as _registry
-from . import full_factorial, oat  # noqa: F401  (register the built-ins)
+from . import (  # noqa: F401  (register the built-ins)
+    definitive_screening,
+    fractional_factorial,
+    full_factorial,
+    morris,
+    oat,
+    response_surface,
+    sobol,
+)
 from .base import Design, DesignError, ScreeningResult
 
 

@@ -1,7 +1,13 @@
 """Surrogates (plugin group ``sensfw.surrogates``): scikit-learn regressors of a score."""
 
 from ..plugins import surrogates as _registry
-from . import eq18  # noqa: F401  (register the built-ins)
+from . import (  # noqa: F401  (register the built-ins)
+    auto,
+    eq18,
+    gaussian_process,
+    polynomial,
+    random_forest,
+)
 from ._validation import SurrogateError
 
 

@@ -1,0 +1,97 @@
+"""Morris elementary effects (SALib ``sample.morris`` / ``analyze.morris``)."""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+import pandas as pd
+
+from ..errors import AnalysisError
+from ..params import DesignSpace
+from ..plugins import designs
+from ._coded import to_table
+from .base import Design, DesignError, ScreeningResult, responses
+
+
+@designs.register("morris")
+class Morris(Design):
+    """Trajectories of one-at-a-time steps on a grid of ``levels`` (Morris 1991; Campolongo
+    et al. 2007's mu*). ``trajectories`` N; ``optimal_trajectories`` picks that many of the
+    N with the largest spread (Campolongo's optimisation, ``local_optimization`` for speed);
+    ``groups`` maps a group name to variables moved together (r (G+1) runs). Analysis: mu,
+    mu*, sigma and the bootstrap confidence interval of mu*; importance = mu*."""
+
+    name = "morris"
+    defaults: ClassVar[dict] = {"trajectories": 10, "levels": 4, "optimal_trajectories": None,
+                                "local_optimization": True, "groups": None,
+                                "num_resamples": 200, "conf_level": 0.95}
+
+    def validate(self):
+        o = self.options
+        if not isinstance(o["trajectories"], int) or o["trajectories"] < 2:
+            raise DesignError("design 'morris': trajectories must be an integer >= 2")
+        if not isinstance(o["levels"], int) or o["levels"] < 2 or o["levels"] % 2:
+            raise DesignError("design 'morris': levels must be an even integer >= 2")
+        opt = o["optimal_trajectories"]
+        if opt is not None and (not isinstance(opt, int) or not 2 <= opt < o["trajectories"]):
+            raise DesignError("design 'morris': optimal_trajectories must be an integer in "
+                              "[2, trajectories)")
+
+    def _problem(self, space: DesignSpace) -> dict:
+        prob = {"num_vars": len(space), "names": space.names, "bounds": [[-1.0, 1.0]] *
+                len(space)}
+        groups = self.options["groups"]
+        if groups:
+            member = {v: g for g, vs in groups.items() for v in vs}
+            missing = [v for v in space.names if v not in member]
+            if missing:
+                raise DesignError(f"design 'morris': variables without a group: {missing}")
+            prob["groups"] = [member[v] for v in space.names]
+        return prob
+
+    def _n_groups(self, space):
+        g = self.options["groups"]
+        return len(g) if g else len(space)
+
+    def n_runs(self, space: DesignSpace) -> int:
+        r = self.options["optimal_trajectories"] or self.options["trajectories"]
+        return r * (self._n_groups(space) + 1)
+
+    def generate(self, space: DesignSpace, seed=None) -> pd.DataFrame:
+        from SALib.sample import morris
+
+        o = self.options
+        X = morris.sample(self._problem(space), N=o["trajectories"], num_levels=o["levels"],
+                          optimal_trajectories=o["optimal_trajectories"],
+                          local_optimization=o["local_optimization"], seed=seed)
+        return to_table(space, X, "morris")
+
+    def analyze(self, space: DesignSpace, table: pd.DataFrame, y) -> ScreeningResult:
+        from SALib.analyze import morris
+
+        y = responses(table, y, self.name)
+        step = self._n_groups(space) + 1
+        if len(y) % step:
+            raise AnalysisError("morris: the table is not made of whole trajectories")
+        traj = y.reshape(-1, step)
+        keep = np.all(np.isfinite(traj), axis=1)
+        notes = []
+        if not keep.all():
+            notes.append(f"{(~keep).sum()} of {len(keep)} trajectories had a failed run and "
+                         "were left out")
+        if keep.sum() < 2:
+            raise AnalysisError("morris: fewer than 2 complete trajectories; elementary effects "
+                                "need at least 2")
+        rows = np.repeat(keep, step)
+        Z = space.code(table).to_numpy()[rows]
+        res = morris.analyze(self._problem(space), Z, y[rows], num_resamples=
+                             self.options["num_resamples"], conf_level=self.options[
+                                 "conf_level"], num_levels=self.options["levels"], seed=0)
+        names = list(res["names"])
+        tab = pd.DataFrame({"variable": names, "mu": res["mu"], "mu_star": res["mu_star"],
+                            "sigma": res["sigma"], "mu_star_conf": res["mu_star_conf"]}) \
+            .set_index("variable")
+        imp = tab["mu_star"] / tab["mu_star"].max() if tab["mu_star"].max() > 0 \
+            else tab["mu_star"]
+        return ScreeningResult(importance=imp, table=tab, notes=notes)

@@ -1,0 +1,50 @@
+"""Polynomial response surface of any degree, optionally sparse (LARS)."""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+
+from ..plugins import surrogates
+from ._validation import SurrogateError, check_xy, scaling
+
+
+@surrogates.register("polynomial")
+class Polynomial(RegressorMixin, BaseEstimator):
+    """All monomials up to ``degree`` of the inputs coded to [-1, 1] (``bounds`` or the data
+    range), fitted by least squares, or sparsely with ``selection="lars"`` (LassoLarsCV:
+    least-angle regression with the penalty chosen by cross-validation, for few runs and
+    many terms)."""
+
+    def __init__(self, degree: int = 2, selection: str | None = None, bounds=None,
+                 cv: int = 5):
+        self.degree = degree
+        self.selection = selection
+        self.bounds = bounds
+        self.cv = cv
+
+    def fit(self, X, y):
+        from sklearn.linear_model import LassoLarsCV, LinearRegression
+        from sklearn.preprocessing import PolynomialFeatures
+
+        if not isinstance(self.degree, int) or self.degree < 1:
+            raise SurrogateError("Polynomial: degree must be an integer >= 1")
+        if self.selection not in (None, "lars"):
+            raise SurrogateError("Polynomial: selection must be None or 'lars'")
+        X, y = check_xy(self, X, y, fit=True)
+        self.mid_, self.half_ = scaling(self, X, self.bounds)
+        self.features_ = PolynomialFeatures(self.degree, include_bias=False)
+        A = self.features_.fit_transform((X - self.mid_) / self.half_)
+        if self.selection == "lars":
+            self.model_ = LassoLarsCV(cv=min(self.cv, len(y))).fit(A, y)
+        else:
+            if len(y) <= A.shape[1]:
+                raise SurrogateError(f"Polynomial: {len(y)} runs for {A.shape[1] + 1} terms; "
+                                     "use selection='lars' or a lower degree")
+            self.model_ = LinearRegression().fit(A, y)
+        self.n_terms_ = int(np.count_nonzero(self.model_.coef_)) + 1
+        return self
+
+    def predict(self, X):
+        X = check_xy(self, X)
+        return self.model_.predict(self.features_.transform((X - self.mid_) / self.half_))

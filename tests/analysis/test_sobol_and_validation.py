@@ -1,0 +1,42 @@
+"""Sobol' indices on a surrogate and confirmation-run coverage (issue 5)."""
+
+import numpy as np
+import pandas as pd
+from scipy.stats import qmc
+
+from sensfw.analysis.sobol import sobol_indices
+from sensfw.analysis.validation import confirmation, validate
+from sensfw.surrogates import make_surrogate
+from sensfw.testing import ISHIGAMI_BOUNDS, ishigami, ishigami_indices, quadratic
+
+NAMES = ["x1", "x2", "x3"]
+
+
+def test_gaussian_process_sobol_indices_of_ishigami_from_200_lhs_runs():
+    U = qmc.LatinHypercube(d=3, seed=4).random(200)
+    X = pd.DataFrame(-np.pi + 2 * np.pi * U, columns=NAMES)
+    gp = make_surrogate("gaussian_process", bounds=ISHIGAMI_BOUNDS).fit(X, ishigami(X))
+    idx = sobol_indices(gp, ISHIGAMI_BOUNDS, NAMES, n=2048, seed=1)
+    ref = ishigami_indices()
+    np.testing.assert_allclose(idx["S1"], ref["S1"], atol=0.05)
+    np.testing.assert_allclose(idx["ST"], ref["ST"], atol=0.05)
+    assert np.all(idx["ST_conf"] > 0)  # bootstrap intervals are reported
+
+
+def test_prediction_interval_coverage_matches_its_level():
+    sigma = 0.3
+    f, _ = quadratic({0: 1.0, 1: -2.0}, squares={0: 1.5}, interactions={(0, 1): 0.5})
+    rng = np.random.default_rng(5)
+    Xtr = pd.DataFrame(rng.uniform(-1, 1, (60, 2)), columns=["a", "b"])
+    ytr = f(Xtr.to_numpy()) + sigma * rng.standard_normal(60)
+    est = make_surrogate("eq18", bounds=[(-1, 1), (-1, 1)]).fit(Xtr, ytr)
+    Xte = pd.DataFrame(rng.uniform(-1, 1, (400, 2)), columns=["a", "b"])
+    yte = f(Xte.to_numpy()) + sigma * rng.standard_normal(400)
+    conf = confirmation(est, Xte, yte, alpha=0.05)
+    # the model is right and the noise Gaussian, so 95 % intervals cover ~95 %; with 400
+    # points the binomial spread is +-2 points, far inside the +-10 points required
+    assert abs(conf["coverage"] - 0.95) < 0.10
+    assert conf["rmse"] < 1.2 * sigma
+    v = validate(est, Xtr, ytr)
+    assert v["q2_loo"] > 0.9 and v["q2_kfold"] > 0.9 and len(v["residuals"]) == 60
+    assert set(v["vif"]) == {"a", "b"}
