@@ -356,6 +356,60 @@ def augment(
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
 
+@app.command("compare-designs")
+@_user_errors
+def compare_designs_cmd(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    designs: Annotated[str, typer.Option(help="comma-separated design names")] =
+    "oat,morris,definitive_screening,fractional_factorial,lhs",
+    option: Annotated[list[str] | None, typer.Option(
+        help="design option DESIGN.KEY=VALUE, e.g. morris.trajectories=4")] = None,
+    reference_runs: Annotated[int | None, typer.Option(
+        help="runs of the reference Latin hypercube (default 10 per variable)")] = None,
+    reference_surrogate: Annotated[str, typer.Option()] = "gaussian_process",
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/designs"),
+    workers: Annotated[int | None, typer.Option()] = None,
+    backend: Annotated[str | None, typer.Option()] = None,
+    scheduler: Annotated[str | None, typer.Option()] = None,
+    progress: Annotated[bool, typer.Option()] = True,
+) -> None:
+    """Compare design strategies on the study's screening stage against a Sobol' reference."""
+    from .analysis.compare_designs import agreement_table, compare_designs
+    from .plugins import designs as registry
+    from .report.measure import write_designs_report
+    from .study import Study
+
+    study = Study.load(study_file)
+    names = [d.strip() for d in designs.split(",") if d.strip()]
+    for n in names:
+        registry.get(n)
+    opts: dict[str, dict] = {}
+    for item in option or []:
+        key, sep, val = item.partition("=")
+        dname, dot, oname = key.partition(".")
+        if not (sep and dot):
+            raise SensfwError(f"--option {item!r}: expected DESIGN.KEY=VALUE")
+        try:
+            value = json.loads(val)
+        except json.JSONDecodeError:
+            value = val
+        opts.setdefault(dname, {})[oname] = value
+    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
+    try:
+        result = compare_designs(study, runner, names, opts, reference_runs,
+                                 reference_surrogate, log=lambda s: console.print(f"[cyan]{s}"))
+    finally:
+        runner.progress.close()
+        runner.close()
+    _json(out_dir / "designs.json", result)
+    write_designs_report(study, result, out_dir / "designs.html")
+    out.print(agreement_table(result).to_string())
+    out.print(f"reference Q2 (k-fold) {result['reference']['q2_kfold']:.3f}; fewest runs to "
+              f"the reference top-{result['top_k']}: "
+              f"{result['fewest_runs_to_reference_top_k']}")
+    out.print(f"-> {out_dir}/designs.json, {out_dir}/designs.html")
+
+
 @app.command()
 @_user_errors
 def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]) -> None:

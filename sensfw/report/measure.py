@@ -187,3 +187,35 @@ def write_augment_report(study, result, path) -> Path:
         ax.grid(True, alpha=0.3)
         page.figure(fig, "Design, surrogate-proposed and local-search points.")
     return page.write(path)
+
+
+def write_designs_report(study, result, path) -> Path:
+    """Design-strategy comparison: table and agreement against runs spent."""
+    from ..analysis.compare_designs import agreement_table
+
+    ref = result["reference"]
+    page = Page(f"sensfw: design strategies compared ({study.name})",
+                f"scorer {result['scorer']}; {len(result['variables'])} variables")
+    q2 = ref["q2_kfold"]
+    page.p(f"Reference ranking: total Sobol' indices of a {ref['surrogate']} surrogate trained "
+           f"on a {ref['runs']}-run Latin hypercube (Q² LOO {ref['q2_loo']:.3f}, k-fold "
+           f"{q2:.3f}): " + ", ".join(ref["ranking"]), "ok" if q2 and q2 > 0.8 else "note")
+    page.table(agreement_table(result))
+    best = result["fewest_runs_to_reference_top_k"]
+    page.p(f"Fewest runs to the reference top-{result['top_k']}: {best or 'no design'}.",
+           "ok" if best else "note")
+    fig, ax = plt.subplots(figsize=(8, 4))
+    markers = "osD^vP*X"
+    for i, r in enumerate(result["designs"]):
+        tau = "" if r["kendall_tau"] is None else f", Kendall tau {r['kendall_tau']:.2f}"
+        ax.scatter(r["runs"], r["top_k_overlap"] + 0.015 * (i - 2), s=70,
+                   marker=markers[i % len(markers)], label=f"{r['design']}{tau}")
+    ax.legend(fontsize=8, loc="lower right")
+    ax.set_xlabel("runs spent")
+    ax.set_ylabel(f"top-{result['top_k']} overlap with the reference")
+    ax.set_ylim(-0.05, 1.1)
+    ax.grid(True, alpha=0.3)
+    page.figure(fig, "Agreement with the reference ranking against runs spent.")
+    sob = pd.DataFrame(ref["sobol"]).T
+    page.table(sob)
+    return page.write(path)
