@@ -165,3 +165,37 @@ class FaultInjection(Model):
         if self._hit("diverge", p):
             raise SimulationError(self.name, "diverged (injected fault)", p)
         return self.inner.simulate(p, excitation, solver)
+
+
+@models.register("noisy_quadratic")
+class NoisyQuadratic(Model):
+    """``y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3 + noise`` on [-1, 1]^3 with Gaussian noise
+    of standard deviation ``noise``, drawn from a generator seeded by the parameter values
+    (the same run gives the same value: runs stay cacheable). A test model for regression
+    validation: Eq. 18 is the true model, so its prediction intervals must cover at their
+    nominal level."""
+
+    name = "noisy_quadratic"
+    version = "1"
+    sensors = ("y",)
+    default_output = "y"
+
+    def __init__(self, noise: float = 0.2):
+        self.noise = float(noise)
+
+    def parameters(self) -> ParameterSet:
+        return ParameterSet([Parameter(f"x{i}", "", 0.0, -1.0, 1.0) for i in (1, 2, 3)])
+
+    def options(self) -> dict:
+        return {"noise": self.noise}
+
+    def simulate(self, params, excitation=None, solver=None) -> Signals:
+        import hashlib
+
+        p = self.parameters().complete(params)
+        x1, x2, x3 = p["x1"], p["x2"], p["x3"]
+        seed = int.from_bytes(hashlib.sha256(repr((x1, x2, x3)).encode()).digest()[:8],
+                              "little")
+        eps = np.random.default_rng(seed).standard_normal()
+        y = 1 + x1 - 2 * x2 + 1.5 * x1**2 + 0.5 * x1 * x3 + self.noise * eps
+        return scalar_signals({"y": y})

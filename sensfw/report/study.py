@@ -186,6 +186,15 @@ def validation_table(per: dict) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("surrogate").astype(float)
 
 
+def _time_signals(result, stage) -> bool:
+    """Whether the stage's runs are swept time signals (not a function model's scalars)."""
+    for key in stage.keys:
+        sig = _signals(result, key)
+        if sig is not None:
+            return sig.f_inst is not None and len(sig.t) >= 256
+    return False
+
+
 def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
     frame = pd.DataFrame(reg["coefficients"]).set_index("term")
     sig = (frame["p"] < 0.05).fillna(False)
@@ -210,10 +219,12 @@ def write_study_report(result, path: str | Path) -> Path:
                 f"{len(stage.table)} runs")
         for n in stage.notes:
             page.note(n)
-        if stage.selected is not None:
+        signals = _time_signals(result, stage)
+        if stage.selected is not None and signals:
             page.figure(frf_overlay(result, stage, study.output),
                         "Fig. 7 analogue: FRFs (Hv) of the min (dashed) and max (solid) runs of "
                         "the most sensitive variables over the nominal reference.")
+        if stage.selected is not None:
             page.figure(sensitivity_bars(stage, stage.spec.select.threshold),
                         "Fig. 8 analogue: normalised sensitivity from the FRF scalar.")
             page.p("Selected for the next stage: " + (", ".join(stage.selected) or "none"),
@@ -223,9 +234,10 @@ def write_study_report(result, path: str | Path) -> Path:
         if stage.screening is not None:
             tab = stage.screening.table
             page.table(tab if isinstance(tab, pd.DataFrame) else pd.DataFrame(tab))
-        if stage.surrogates:
+        if stage.surrogates and signals:
             page.figure(order_spectrum_mean(result, stage, study.output),
                         "Fig. 9 analogue: averaged order spectrum of the stage's runs.")
+        if stage.surrogates:
             page.figure(actual_vs_predicted(stage),
                         "Fig. 10a analogue: simulated against predicted scores.")
             for label, reg in stage.regression.items():
@@ -244,6 +256,7 @@ def write_study_report(result, path: str | Path) -> Path:
                 for name in per:
                     page.figure(residual_plots(stage, label, name),
                                 f"{label} / {name}: residuals against fitted values, normal Q-Q.")
-            page.figure(spectrograms(result, stage, study.output),
-                        "Fig. 11 analogue: spectrograms of the first and last run.")
+            if signals:
+                page.figure(spectrograms(result, stage, study.output),
+                            "Fig. 11 analogue: spectrograms of the first and last run.")
     return page.write(path)
