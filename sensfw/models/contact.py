@@ -135,3 +135,43 @@ class ContactLaw:
         """dF/d(delta) at the static penetration for ``force`` (N/m)."""
         d = self.static_deflection(force)
         return self.k * self.b * d ** (self.b - 1.0) if d > 0 else 0.0
+
+
+def fit_power_law(u, force, g=None, k0: float | None = None, b0: float = 1.5,
+                  b_bounds: tuple[float, float] = (0.5, 3.0)) -> tuple[float, float]:
+    """Contact stiffness ``k`` and exponent ``b`` from a force-deflection curve (Eq. 5):
+    ``min_{k,b} sum_i (F_i - g(u_i) k u_i^b)^2`` by sequential quadratic programming
+    (scipy SLSQP; MATLAB's fmincon or Adams' MSCADS-SQP in the paper), with ``k`` optimised
+    on a log scale for conditioning. ``u`` and ``force`` are the reference curve (e.g.
+    Hertz/Kunert or FEM), ``g`` the kinematic scaling between local and global deflection
+    (default 1). Returns ``(k, b)`` in the units of ``force`` and ``u``.
+    """
+    from scipy.optimize import minimize
+
+    u = np.asarray(u, float)
+    F = np.asarray(force, float)
+    if u.shape != F.shape or len(u) < 2 or np.any(u <= 0):
+        raise ValueError("fit_power_law needs matching positive deflections and forces")
+    gu = np.ones_like(u) if g is None else np.asarray(g(u), float)
+    scale = float(np.max(np.abs(F)))
+    if k0 is None:
+        k0 = float(F[-1] / (gu[-1] * u[-1] ** b0))
+
+    def cost(z):
+        k, b = 10.0 ** z[0], z[1]
+        return float(np.sum(((F - gu * k * u**b) / scale) ** 2))
+
+    res = minimize(cost, x0=[np.log10(k0), b0], method="SLSQP",
+                   bounds=[(np.log10(k0) - 6, np.log10(k0) + 6), b_bounds],
+                   options={"ftol": 1e-14, "maxiter": 500})
+    return float(10.0 ** res.x[0]), float(res.x[1])
+
+
+def critical_damping(k_red: float, m_red: float) -> float:
+    """Critical damping ``2 sqrt(k_red m_red)`` of a contact with reduced stiffness and mass,
+    the upper bound of the damping range (Sect. 2.2). Eq. 6 prints ``sqrt(k_red / m_red)``,
+    which is the contact's natural angular frequency, not a damping coefficient; the
+    dimensionally consistent critical damping is used here."""
+    if k_red <= 0 or m_red <= 0:
+        raise ValueError("reduced stiffness and mass must be positive")
+    return 2.0 * float(np.sqrt(k_red * m_red))
