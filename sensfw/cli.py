@@ -6,6 +6,7 @@ printed without a traceback and exit with status 2.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import sys
@@ -24,6 +25,12 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                        "model agree with the rig?")
 console = Console(stderr=True)
 out = Console()
+
+
+Workers = Annotated[int | None, typer.Option(help="worker processes (default: cores)")]
+Backend = Annotated[str | None, typer.Option(help="serial | processes | dask")]
+Scheduler = Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")]
+ShowProgress = Annotated[bool, typer.Option(help="show the progress bar")]
 
 
 def _user_errors(fn):
@@ -98,13 +105,13 @@ def _runner(study, out_dir: Path, workers, backend, scheduler, retry_failed=Fals
 def run(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="output folder")] = Path("out"),
-    workers: Annotated[int | None, typer.Option(help="worker processes (default: cores)")] = None,
-    backend: Annotated[str | None, typer.Option(help="serial | processes | dask")] = None,
-    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")] = None,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="print the plan, run nothing")] = False,
     retry_failed: Annotated[bool, typer.Option(help="recompute runs that failed before")] = False,
     report: Annotated[bool, typer.Option(help="write report.html")] = True,
-    progress: Annotated[bool, typer.Option(help="show the progress bar")] = True,
+    progress: ShowProgress = True,
 ) -> None:
     """Run a study: screen, design of experiments, Eq. 18 regression, report."""
     from .pipeline import plan, results_json, run_study
@@ -188,9 +195,16 @@ def simulate(
               f"{info['amplitude']:g} N, noise {noise:g})")
 
 
-def _measured_runner(study, out_dir: Path, workers, backend, scheduler, progress):
+@contextlib.contextmanager
+def _running(study, out_dir: Path, workers, backend, scheduler, progress):
+    """A Runner on ``out_dir/runs``; its progress bar and workers are closed on exit."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    return _runner(study, out_dir, workers, backend, scheduler, progress=progress)
+    runner = _runner(study, out_dir, workers, backend, scheduler, progress=progress)
+    try:
+        yield runner
+    finally:
+        runner.progress.close()
+        runner.close()
 
 
 def _json(path: Path, data) -> None:
@@ -209,10 +223,10 @@ def compare(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
-    workers: Annotated[int | None, typer.Option()] = None,
-    backend: Annotated[str | None, typer.Option()] = None,
-    scheduler: Annotated[str | None, typer.Option()] = None,
-    progress: Annotated[bool, typer.Option()] = True,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
 ) -> None:
     """See where the model fails: FRF error per band, resonances, harmonics, THD, levels."""
     from .measure.compare import amplitude_dependence, compare_level
@@ -222,12 +236,8 @@ def compare(
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
-    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
-    try:
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         sims = simulate(study, runner, [Variant()], [m.level for m in meas])
-    finally:
-        runner.progress.close()
-        runner.close()
     comparisons, pairs, notes = [], [], []
     ex = study.excitation
     for m in meas:
@@ -260,10 +270,10 @@ def diagnose(
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/diagnose"),
     candidates: Annotated[str | None, typer.Option(
         help="comma-separated effect names (default: every registered effect)")] = None,
-    workers: Annotated[int | None, typer.Option()] = None,
-    backend: Annotated[str | None, typer.Option()] = None,
-    scheduler: Annotated[str | None, typer.Option()] = None,
-    progress: Annotated[bool, typer.Option()] = True,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
 ) -> None:
     """Which physical effect does the model lack? Calibrate each candidate, rank by BIC."""
     from .measure.diagnose import Evaluator
@@ -274,9 +284,8 @@ def diagnose(
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
-    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
     t0 = time.perf_counter()
-    try:
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         names = [c.strip() for c in candidates.split(",")] if candidates else None
         result = run_diagnose(study, meas, runner, names,
                               log=lambda s: console.print(f"[cyan]{s}"))
@@ -288,9 +297,6 @@ def diagnose(
             best_cmp = ev.comparisons([Variant.of([{"name": top["effect"],
                                                      "attach": top["attach"]}],
                                                    top["params"])], "best")[0]
-    finally:
-        runner.progress.close()
-        runner.close()
     result["wall_s"] = time.perf_counter() - t0
     _json(out_dir / "diagnose.json", result)
     write_diagnose_report(study, result, base_cmp, best_cmp, out_dir / "report.html")
@@ -309,10 +315,10 @@ def augment(
     measured: Measured,
     effect: Annotated[str, typer.Option(help="effect to add, NAME[@ATTACH]")],
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
-    workers: Annotated[int | None, typer.Option()] = None,
-    backend: Annotated[str | None, typer.Option()] = None,
-    scheduler: Annotated[str | None, typer.Option()] = None,
-    progress: Annotated[bool, typer.Option()] = True,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
 ) -> None:
     """Add a physical effect, calibrate it, write the augmented study and the error path."""
     import tomllib
@@ -327,13 +333,9 @@ def augment(
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
     name, _, attach = effect.partition("@")
-    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
-    try:
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = run_augment(study, meas, runner, name, attach or None,
                              log=lambda s: console.print(f"[cyan]{s}"))
-    finally:
-        runner.progress.close()
-        runner.close()
     data = tomllib.loads(study_file.read_text())
     model = data.setdefault("model", {})
     opts = model.setdefault("options", {})
@@ -368,10 +370,10 @@ def compare_designs_cmd(
         help="runs of the reference Latin hypercube (default 10 per variable)")] = None,
     reference_surrogate: Annotated[str, typer.Option()] = "gaussian_process",
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/designs"),
-    workers: Annotated[int | None, typer.Option()] = None,
-    backend: Annotated[str | None, typer.Option()] = None,
-    scheduler: Annotated[str | None, typer.Option()] = None,
-    progress: Annotated[bool, typer.Option()] = True,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
 ) -> None:
     """Compare design strategies on the study's screening stage against a Sobol' reference."""
     from .analysis.compare_designs import agreement_table, compare_designs
@@ -394,13 +396,9 @@ def compare_designs_cmd(
         except json.JSONDecodeError:
             value = val
         opts.setdefault(dname, {})[oname] = value
-    runner = _measured_runner(study, out_dir, workers, backend, scheduler, progress)
-    try:
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_designs(study, runner, names, opts, reference_runs,
                                  reference_surrogate, log=lambda s: console.print(f"[cyan]{s}"))
-    finally:
-        runner.progress.close()
-        runner.close()
     _json(out_dir / "designs.json", result)
     write_designs_report(study, result, out_dir / "designs.html")
     out.print(agreement_table(result).to_string())
