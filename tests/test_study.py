@@ -2,6 +2,7 @@
 traceback."""
 
 import copy
+import os
 import subprocess
 import sys
 import tomllib
@@ -96,3 +97,14 @@ def test_cli_reports_errors_with_exit_code_2_and_no_traceback(tmp_path):
     assert proc.returncode == 2
     assert "parameters.clutch_drive_damping" in proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
+
+
+def test_dry_run_prints_the_plan_without_running(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "sensfw", "run", str(ROOT / "studies" /
+                           "paper.toml"), "--dry-run", "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "COLUMNS": "200"})
+    assert proc.returncode == 0, proc.stderr
+    assert "39" in proc.stdout and "81" in proc.stdout  # 2 x 19 + 1 and 3^4
+    assert "at most 120 runs" in proc.stdout
+    assert not (tmp_path / "o").exists()
