@@ -34,7 +34,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from .errors import StudyError, UnknownPluginError
+from .errors import SensfwError, StudyError, UnknownPluginError
 from .excitation import Chirp
 from .models.base import Model, SolverSettings
 from .params import DesignSpace, ParameterSet
@@ -270,6 +270,9 @@ class Study:
             model = cls(**self.spec.model.options)
         except TypeError as err:
             problems.append(("model.options", f"not accepted by {self.spec.model.name}: {err}"))
+            return None
+        except SensfwError as err:  # e.g. an unknown effect or attach point
+            problems.append(("model.options", str(err)))
             return None
         out = self.spec.model.output or model.default_output
         if out not in model.sensors:

@@ -77,6 +77,15 @@ def test_stage_references_and_channels_are_checked():
     assert "unknown design variable 'slide_dampin'" in got["stages[0].variables"]
 
 
+def test_unknown_effect_in_model_options():
+    data = copy.deepcopy(QUICK)
+    data["model"]["options"] = {"effects": [{"name": "flexible_mood"}]}
+    got = problems(data)
+    assert "unknown effect 'flexible_mood'; available:" in got["model.options"]
+    data["model"]["options"] = {"effects": [{"name": "clearance", "attach": "moon"}]}
+    assert "cannot attach to 'moon'" in problems(data)["model.options"]
+
+
 def test_missing_sections_and_bad_toml(tmp_path):
     got = problems({"stages": []})
     assert "study" in got and "stages" in got
