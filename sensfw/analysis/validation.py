@@ -75,6 +75,9 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
         "fitted": fitted.tolist(),
         "residuals": resid.tolist(),
     }
+    if out["q2_loo"] is None and same_scale and hasattr(estimator, "loo_predict"):
+        loo = np.asarray(estimator.loo_predict(), float)  # closed form, e.g. a GP's
+        out["q2_loo"] = float(1 - np.sum((ya - loo) ** 2) / ss) if ss > 0 else float("nan")
     if out["q2_loo"] is None:
         out["q2_loo"] = q2_cv(estimator, X, ya, KFold(n_splits=n))
     kk = min(k, n)

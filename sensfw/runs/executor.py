@@ -95,7 +95,10 @@ def _worker_main(tasks, results, wid: int) -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides what to do on Ctrl-C
     while True:
-        spec = tasks.recv()
+        try:
+            spec = tasks.recv()
+        except (EOFError, OSError):  # the parent is gone (killed): nothing left to do
+            return
         if spec is None:
             return
         results.put((wid, execute(spec)))

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pandas as pd
+import pytest
 from scipy.stats import qmc
 
 from sensfw.analysis.sobol import sobol_indices
@@ -40,3 +41,27 @@ def test_prediction_interval_coverage_matches_its_level():
     v = validate(est, Xtr, ytr)
     assert v["q2_loo"] > 0.9 and v["q2_kfold"] > 0.9 and len(v["residuals"]) == 60
     assert set(v["vif"]) == {"a", "b"}
+
+
+def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
+    """The GP's leave-one-out predictions (R&W Eq. 5.12) against n independent fits with the
+    same fitted kernel, leaving each point out (targets normalised as in the full fit)."""
+    from sklearn.gaussian_process import GaussianProcessRegressor
+
+    rng = np.random.default_rng(2)
+    X = pd.DataFrame(rng.uniform(-np.pi, np.pi, (40, 3)), columns=NAMES)
+    y = ishigami(X) + 0.05 * rng.standard_normal(40)
+    gp = make_surrogate("gaussian_process", bounds=ISHIGAMI_BOUNDS).fit(X, y)
+    m = gp.model_
+    Xs = (X.to_numpy() - gp.lo_) / gp.span_
+    yn = (y - m._y_train_mean) / m._y_train_std
+    ref = np.empty(len(y))
+    for i in range(len(y)):
+        keep = np.arange(len(y)) != i
+        fixed = GaussianProcessRegressor(m.kernel_, optimizer=None, alpha=m.alpha)
+        fixed.fit(Xs[keep], yn[keep])
+        ref[i] = fixed.predict(Xs[i : i + 1])[0] * m._y_train_std + m._y_train_mean
+    np.testing.assert_allclose(gp.loo_predict(), ref, rtol=1e-8, atol=1e-8 * np.std(y))
+    q2 = validate(gp, X, y)["q2_loo"]
+    assert q2 == pytest.approx(1 - np.sum((y - ref) ** 2) / np.sum((y - y.mean()) ** 2),
+                               rel=1e-9)
