@@ -58,6 +58,11 @@ class SimulationError(SensfwError, RuntimeError):
         super().__init__(f"{model} simulation failed: {reason}{where}")
 
 
+class DivergenceError(SimulationError):
+    """The time integration blew up (non-finite or absurd signals): a numerical failure that
+    a smaller step may cure (see :func:`sensfw.runs.spec.execute`)."""
+
+
 class SignalError(SensfwError, ValueError):
     """A signal is unusable for the requested analysis (too short, wrong rate, NaN...)."""
 

@@ -99,6 +99,7 @@ class SolverSection(_Strict):
     method: Literal["RK44", "RK67", "ExplicitMidpoint", "ExplicitEuler", "DOPRI5"] = "RK44"
     step: Quantity = "1e-5 s"
     timeout: Quantity | None = None
+    halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
 
 
 class ExecutionSection(_Strict):
@@ -366,7 +367,8 @@ class Study:
         if self.excitation is not None and step > 1 / self.excitation.fs:
             problems.append(("solver.step", f"step {step:g} s exceeds the output sample period "
                                             f"{1 / self.excitation.fs:g} s"))
-        return SolverSettings(method=s.method, step=step, timeout=timeout)
+        return SolverSettings(method=s.method, step=step, timeout=timeout,
+                              halvings=s.halvings)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import DivergenceError
 from ..excitation import Chirp
 from ..params import Parameter, ParameterSet
 from ..plugins import models
@@ -163,7 +163,7 @@ class FaultInjection(Model):
         if self._hit("hang", p):
             time.sleep(self.hang_seconds)
         if self._hit("diverge", p):
-            raise SimulationError(self.name, "diverged (injected fault)", p)
+            raise DivergenceError(self.name, "diverged (injected fault)", p)
         return self.inner.simulate(p, excitation, solver)
 
 

@@ -85,9 +85,10 @@ class SolverSettings:
     method: str = "RK44"
     step: float = 1e-5
     timeout: float | None = None  # wall seconds per run; None = no limit
+    halvings: int = 1  # retries with half the step after a divergence (explicit stability)
 
     def to_dict(self) -> dict:
-        return {"method": self.method, "step": self.step}
+        return {"method": self.method, "step": self.step, "halvings": self.halvings}
 
 
 class Model(ABC):

@@ -40,7 +40,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import DivergenceError, SimulationError
 from ..excitation import Chirp
 from ..params import Parameter, ParameterSet
 from ..plugins import models
@@ -585,9 +585,9 @@ class ShaftAssembly(Model):
             SC.Reset()
         for name, x in channels.items():
             if len(x) != n_out or not np.all(np.isfinite(x)):
-                raise SimulationError(self.name, f"diverged (non-finite {name!r})", p)
+                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p)
             if np.max(np.abs(x)) > 1e7:
-                raise SimulationError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p)
+                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p)
         t = excitation.time()
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),

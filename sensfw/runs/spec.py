@@ -8,10 +8,10 @@ import math
 import time
 import traceback
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..errors import SensfwError, SimulationError
+from ..errors import DivergenceError, SensfwError, SimulationError
 from ..excitation import Chirp
 from ..models.base import Model, Signals, SolverSettings
 
@@ -89,6 +89,29 @@ def build_model(spec: RunSpec) -> Model:
     return models.get(spec.model)(**options)
 
 
+def simulate_with_halving(model: Model, params: dict, excitation: Chirp,
+                          solver: SolverSettings) -> Signals:
+    """``model.simulate``, retried with half the step after a divergence, up to
+    ``solver.halvings`` times: an explicit integrator at a fixed step is only stable while
+    step x highest eigenfrequency stays small, and stiff corners of a design space (several
+    contact stiffnesses at their maxima) can cross that limit. The step actually used is in
+    ``signals.meta["step"]``; a run that diverges at every step fails with all steps named."""
+    step, tried = solver.step, []
+    while True:
+        try:
+            signals = model.simulate(params, excitation, replace(solver, step=step))
+        except DivergenceError as err:
+            tried.append(step)
+            if len(tried) > solver.halvings:
+                steps = ", ".join(f"{h:g}" for h in tried)
+                raise DivergenceError(err.model, f"{err.reason} at step {steps} s",
+                                      err.parameters) from None
+            step /= 2
+        else:
+            signals.meta.update(step=step, step_halvings=len(tried))
+            return signals
+
+
 def execute(spec: RunSpec) -> RunResult:
     """Run one simulation (in a worker). Never raises: a failure becomes a failed result."""
     t0 = time.perf_counter()
@@ -98,7 +121,7 @@ def execute(spec: RunSpec) -> RunResult:
         exc = Chirp(**spec.excitation)
         solver = SolverSettings(**{k: v for k, v in spec.solver.items()
                                    if k in SolverSettings.__dataclass_fields__})
-        signals = model.simulate(dict(spec.params), exc, solver)
+        signals = simulate_with_halving(model, dict(spec.params), exc, solver)
         return RunResult(key, True, signals=signals, wall=time.perf_counter() - t0)
     except SimulationError as err:
         return RunResult(key, False, error=str(err), wall=time.perf_counter() - t0)

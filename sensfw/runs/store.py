@@ -97,6 +97,9 @@ class RunStore:
             data = buf.getvalue()
             _atomic_write(data_path, data)
             meta["sha256"] = hashlib.sha256(data).hexdigest()
+            for k in ("step", "step_halvings"):  # the step actually used (divergence retries)
+                if k in result.signals.meta:
+                    meta[k] = result.signals.meta[k]
         else:
             meta["error"] = result.error
         _atomic_write(meta_path, json.dumps(meta, indent=1, sort_keys=True).encode())

@@ -144,3 +144,39 @@ def test_divergence_is_one_clear_error_and_silent(capfd):
     assert "shaft_assembly simulation failed" in msg and "slide_damping=234" in msg
     captured = capfd.readouterr()
     assert captured.out == "" and captured.err == ""
+
+
+# A corner of Table 1 found by the fractional factorial of compare-designs on the paper
+# study: both clutch contacts at their stiffest with the drive contact's softest exponent.
+STIFF_CORNER = {
+    "max": ["clutch_crank_stiffness", "clutch_drive_stiffness", "l1_clearance", "l1_damping",
+            "slide_damping", "slide_exponent", "slide_mu_dynamic", "slide_mu_static",
+            "slide_v_friction", "slide_v_stiction", "spring_damping", "spring_stiffness"],
+    "min": ["bearing_preload", "clutch_crank_damping", "clutch_drive_damping",
+            "clutch_drive_exponent", "l3_clearance", "l3_damping", "slide_clearance",
+            "slide_stiffness"],
+}
+
+
+def test_a_stiff_corner_that_diverges_at_the_step_is_rerun_at_half_the_step(tmp_path):
+    """RK4 at 10 us is unstable at this corner; one halving cures it, the step used is
+    recorded, and with no halving allowed the failure names the step."""
+    import json
+
+    from sensfw.runs import RunStore
+    from sensfw.runs.spec import RunSpec, execute
+
+    m = ShaftAssembly()
+    params = {n: getattr(PARAMETERS[n], side) for side, names in STIFF_CORNER.items()
+              for n in names}
+    params = PARAMETERS.complete(params)
+    ex = Chirp(50, 5000, 0.05, 20000, AMP_NOMINAL)
+    strict = execute(RunSpec.create(m, params, ex, SolverSettings(step=1e-5, halvings=0)))
+    assert not strict.ok and "diverged" in strict.error and "at step 1e-05 s" in strict.error
+    spec = RunSpec.create(m, params, ex, SolverSettings(step=1e-5, halvings=1))
+    res = execute(spec)
+    assert res.ok, res.error
+    assert res.signals.meta["step"] == 5e-6 and res.signals.meta["step_halvings"] == 1
+    assert all(np.all(np.isfinite(x)) for x in res.signals.channels.values())
+    RunStore(tmp_path).save(spec, res)
+    assert json.loads((tmp_path / f"{spec.key()}.json").read_text())["step"] == 5e-6

@@ -72,6 +72,7 @@ def test_failed_runs_are_recorded_with_their_reason(tmp_path):
                            "model": "two_dof", "diverge": {"parameter": "k1", "above": 4500.0}}})
     res = execute(s)
     assert not res.ok and "diverged" in res.error and "k1=6000" in res.error
+    assert "at step 1e-05, 5e-06 s" in res.error  # retried once at half the step
     store.save(s, res)
     meta = json.loads((tmp_path / f"{s.key()}.json").read_text())
     assert meta["status"] == "failed" and "diverged" in meta["error"]
