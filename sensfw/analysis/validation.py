@@ -75,11 +75,15 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
         "fitted": fitted.tolist(),
         "residuals": resid.tolist(),
     }
+    out["q2_loo_method"] = "hat matrix" if out["q2_loo"] is not None else None
     if out["q2_loo"] is None and same_scale and hasattr(estimator, "loo_predict"):
-        loo = np.asarray(estimator.loo_predict(), float)  # closed form, e.g. a GP's
-        out["q2_loo"] = float(1 - np.sum((ya - loo) ** 2) / ss) if ss > 0 else float("nan")
+        loo = np.asarray(estimator.loo_predict(), float)  # without refits: GP, forest
+        if np.all(np.isfinite(loo)) and ss > 0:
+            out["q2_loo"] = float(1 - np.sum((ya - loo) ** 2) / ss)
+            out["q2_loo_method"] = getattr(estimator, "loo_method", "loo_predict")
     if out["q2_loo"] is None:
         out["q2_loo"] = q2_cv(estimator, X, ya, KFold(n_splits=n))
+        out["q2_loo_method"] = f"{n} refits"
     kk = min(k, n)
     if kk >= 2:
         out["q2_kfold"] = q2_cv(estimator, X, ya, KFold(n_splits=kk, shuffle=True,

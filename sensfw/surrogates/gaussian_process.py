@@ -19,6 +19,8 @@ class GaussianProcess(RegressorMixin, BaseEstimator):
     log10 of every input whose range spans a factor 10 or more (contact stiffnesses,
     transition velocities), where a response usually varies evenly per decade."""
 
+    loo_method = "closed form (R&W Eq. 5.12)"
+
     def __init__(self, bounds=None, n_restarts_optimizer: int = 3, random_state: int = 0,
                  noise: bool = True, log_features=None):
         self.bounds = bounds

@@ -65,3 +65,22 @@ def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
     q2 = validate(gp, X, y)["q2_loo"]
     assert q2 == pytest.approx(1 - np.sum((y - ref) ** 2) / np.sum((y - y.mean()) ** 2),
                                rel=1e-9)
+
+
+def test_random_forest_out_of_bag_q2_is_close_to_refit_leave_one_out():
+    """Out-of-bag predictions stand in for n refits: each run is predicted by the ~37 % of
+    trees that never saw it, as in leave-one-out (with fewer trees, hence the tolerance)."""
+    from sklearn.model_selection import KFold
+
+    from sensfw.analysis.validation import q2_cv
+
+    X = pd.DataFrame(-np.pi + 2 * np.pi * qmc.LatinHypercube(d=3, seed=7).random(60),
+                     columns=NAMES)
+    y = ishigami(X)
+    rf = make_surrogate("random_forest", n_estimators=100).fit(X, y)
+    v = validate(rf, X, y)
+    assert v["q2_loo_method"] == "out-of-bag"
+    refits = q2_cv(make_surrogate("random_forest", n_estimators=100), X, y,
+                   KFold(n_splits=len(y)))
+    assert 0.3 < refits < 0.95  # a case where the estimate is informative
+    assert v["q2_loo"] == pytest.approx(refits, abs=0.05)
