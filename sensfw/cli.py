@@ -315,6 +315,8 @@ def augment(
     measured: Measured,
     effect: Annotated[str, typer.Option(help="effect to add, NAME[@ATTACH]")],
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
+    start_from: Annotated[Path | None, typer.Option(
+        help="diagnose.json: start from the values diagnose found for this effect")] = None,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -333,8 +335,15 @@ def augment(
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
     name, _, attach = effect.partition("@")
+    start = None
+    if start_from is not None:
+        rows = [r for r in json.loads(start_from.read_text()).get("ranking", [])
+                if r.get("effect") == name and (not attach or r.get("attach") == attach)]
+        if not rows:
+            raise SensfwError(f"{start_from}: no ranking entry for effect {effect!r}")
+        start, attach = rows[0]["params"], rows[0]["attach"]
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
-        result = run_augment(study, meas, runner, name, attach or None,
+        result = run_augment(study, meas, runner, name, attach or None, start=start,
                              log=lambda s: console.print(f"[cyan]{s}"))
     data = tomllib.loads(study_file.read_text())
     model = data.setdefault("model", {})

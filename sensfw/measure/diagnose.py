@@ -23,7 +23,7 @@ of the shipped model's axial FRF read 5-15 dB high).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -339,9 +339,12 @@ def refine_simplex(ev: Evaluator, cand: Candidate, effect: dict, params, label: 
 
 
 def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, effect: str,
-            attach: str | None = None, log=lambda s: None) -> dict:
+            attach: str | None = None, start: Mapping[str, float] | None = None,
+            log=lambda s: None) -> dict:
     """Add ``effect`` to the model and calibrate it: the error trajectory (baseline, effect
-    added at its nominal values, calibrated) and the calibrated parameter values."""
+    added at its nominal values, calibrated) and the calibrated parameter values. ``start``
+    (e.g. the values :func:`diagnose` found) replaces the surrogate-assisted design by a
+    local search from that point."""
     ev = Evaluator(study, measurements, runner)
     cls = effect_registry.get(effect)
     eff = cls(attach=attach)
@@ -353,8 +356,17 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     nominal = {p.name: p.nominal for p in params}
     added = ev.evaluate([Variant.of([spec], nominal)], f"{effect} added")[0]
     log(f"calibrating {effect}@{eff.attach}")
-    cand = calibrate(ev, spec, params, effect, refine=3, seeds=eff.seeds(base_cmp),
-                     levels=cls.design_levels)
+    if start is None:
+        cand = calibrate(ev, spec, params, effect, refine=3, seeds=eff.seeds(base_cmp),
+                         levels=cls.design_levels)
+    else:
+        names = [p.name for p in params]
+        if set(start) != set(names):
+            raise SensfwError(f"start values for {effect} must give exactly {names}, got "
+                              f"{sorted(start)}")
+        x0 = {n: float(start[n]) for n in names}
+        cand = Candidate(effect=effect, attach=eff.attach, params=names, evaluations=[
+            Evaluation(x0, ev.evaluate([Variant.of([spec], x0)], f"{effect} start")[0])])
     cand = refine_local(ev, cand, spec, params, f"{effect} refine")
     cand = refine_simplex(ev, cand, spec, params, f"{effect} refine")
     best = cand.best()

@@ -71,7 +71,7 @@ def test_hidden_effect_is_found_and_calibrated_to_the_noise_floor(name, study, r
     result = diagnose(study, meas, runner)
     assert result["ranking"][0]["effect"] == name, [
         (r["effect"], round(r["error_after"], 3)) for r in result["ranking"][:3]]
-    aug = augment(study, meas, runner, name)
+    aug = augment(study, meas, runner, name, start=result["ranking"][0]["params"])
     # noise floor: the true model against the same noisy data
     spec = effects.get(name)().spec()
     floor = rms(Evaluator(study, meas, runner).evaluate([Variant.of([spec], truth)],
@@ -114,3 +114,20 @@ def test_two_levels_amplitude_dependence_reported_and_used(study, runner, cli, t
     assert result["verdict"] == "contact_hardening"
     # both levels enter the discrepancy: the baseline comparison has one entry per level
     assert len(result["baseline"]["comparison"]) == 2
+
+
+def test_augment_start_from_a_diagnose_file_without_the_effect_is_a_clear_error(
+        study, cli, tmp_path):
+    meas = measurement(study, tmp_path, None, seed=3)
+    study_file = tmp_path / "s.toml"
+    from sensfw.tomlw import dumps
+
+    study_file.write_text(dumps(short_quick()))
+    diag = tmp_path / "diagnose.json"
+    diag.write_text(json.dumps({"ranking": [{"effect": "damping", "attach": "slide",
+                                             "params": {"damping_factor": 2.0}}]}))
+    proc = cli("augment", study_file, "-m", meas, "--effect", "friction", "--start-from",
+               diag, "--out", tmp_path / "aug", "--no-progress")
+    assert proc.returncode == 2, proc.stderr
+    assert "diagnose.json" in proc.stderr and "'friction'" in proc.stderr
+    assert "Traceback" not in proc.stderr
