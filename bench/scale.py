@@ -8,13 +8,19 @@ process pool and for Dask (a LocalCluster of worker processes), and the parallel
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
+from pathlib import Path
 
-from sensfw.excitation import Chirp
-from sensfw.models.base import SolverSettings
-from sensfw.models.shaft_assembly import PARAMETERS, ShaftAssembly
-from sensfw.runs import Runner, RunSpec, RunStore
+# this folder holds bench/signal.py, which would shadow the standard library's signal module
+# in the worker processes (they inherit sys.path): drop it
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+
+from sensfw.excitation import Chirp  # noqa: E402  (after the sys.path fix)
+from sensfw.models.base import SolverSettings  # noqa: E402
+from sensfw.models.shaft_assembly import PARAMETERS, ShaftAssembly  # noqa: E402
+from sensfw.runs import Runner, RunSpec, RunStore  # noqa: E402
 
 
 def specs(n: int, duration: float, tag: int) -> list[RunSpec]:
