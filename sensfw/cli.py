@@ -308,6 +308,21 @@ def diagnose(
     out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
 
 
+def _diagnosed_values(path: Path, name: str, attach: str) -> tuple[dict, str]:
+    """The calibrated values and attach point of effect ``name`` in a diagnose.json."""
+    try:
+        ranking = json.loads(path.read_text()).get("ranking", [])
+        rows = [r for r in ranking
+                if r.get("effect") == name and (not attach or r.get("attach") == attach)]
+    except (OSError, ValueError, AttributeError) as err:
+        raise SensfwError(f"{path}: not a readable diagnose.json ({err})") from None
+    if not rows:
+        raise SensfwError(f"{path}: no ranking entry for effect {name!r}")
+    if not isinstance(rows[0].get("params"), dict) or not rows[0].get("attach"):
+        raise SensfwError(f"{path}: the entry for {name!r} lacks 'params' or 'attach'")
+    return rows[0]["params"], rows[0]["attach"]
+
+
 @app.command()
 @_user_errors
 def augment(
@@ -337,11 +352,7 @@ def augment(
     name, _, attach = effect.partition("@")
     start = None
     if start_from is not None:
-        rows = [r for r in json.loads(start_from.read_text()).get("ranking", [])
-                if r.get("effect") == name and (not attach or r.get("attach") == attach)]
-        if not rows:
-            raise SensfwError(f"{start_from}: no ranking entry for effect {effect!r}")
-        start, attach = rows[0]["params"], rows[0]["attach"]
+        start, attach = _diagnosed_values(start_from, name, attach)
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = run_augment(study, meas, runner, name, attach or None, start=start,
                              log=lambda s: console.print(f"[cyan]{s}"))

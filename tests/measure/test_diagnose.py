@@ -131,3 +131,8 @@ def test_augment_start_from_a_diagnose_file_without_the_effect_is_a_clear_error(
     assert proc.returncode == 2, proc.stderr
     assert "diagnose.json" in proc.stderr and "'friction'" in proc.stderr
     assert "Traceback" not in proc.stderr
+    diag.write_text("{not json")
+    proc = cli("augment", study_file, "-m", meas, "--effect", "friction", "--start-from",
+               diag, "--out", tmp_path / "aug", "--no-progress")
+    assert proc.returncode == 2 and "diagnose.json" in proc.stderr, proc.stderr
+    assert "not a readable diagnose.json" in proc.stderr and "Traceback" not in proc.stderr
