@@ -60,7 +60,13 @@ class SimulationError(SensfwError, RuntimeError):
 
 class DivergenceError(SimulationError):
     """The time integration blew up (non-finite or absurd signals): a numerical failure that
-    a smaller step may cure (see :func:`sensfw.runs.spec.execute`)."""
+    a smaller step may cure (see :func:`sensfw.runs.spec.execute`). ``step`` is the step
+    (s) that diverged, where the model knows it."""
+
+    def __init__(self, model: str, reason: str, parameters: Mapping[str, float] | None = None,
+                 step: float | None = None):
+        super().__init__(model, reason, parameters)
+        self.step = step
 
 
 class SignalError(SensfwError, ValueError):

@@ -306,6 +306,12 @@ def plan(study: Study) -> list[dict]:
     return out
 
 
+def run_step(runner: Runner, key: str) -> dict:
+    """The time step a stored run used and what set it (``{}`` for models without one)."""
+    rec = runner.store.record(key) or {}
+    return {k: rec[k] for k in ("step", "step_limited_by") if k in rec}
+
+
 def results_json(res: StudyResult) -> dict:
     """The machine-readable summary (``results.json``); deterministic for identical runs."""
     stages = []
@@ -314,7 +320,8 @@ def results_json(res: StudyResult) -> dict:
             "name": st.name, "design": st.spec.design, "n_runs": len(st.table),
             "variables": st.space.names,
             "runs": [{"label": lab, "key": key, **{v: float(st.table.loc[lab, v])
-                                                    for v in st.space.names}}
+                                                    for v in st.space.names},
+                      **run_step(res.runner, key)}
                      for lab, key in zip(st.table.index, st.keys, strict=True)],
             "failed": st.failed,
             "scores": {c: st.scores[c].to_dict() for c in st.scores.columns},

@@ -100,6 +100,8 @@ class SolverSection(_Strict):
     step: Quantity = "1e-5 s"
     timeout: Quantity | None = None
     halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
+    # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py)
+    auto_step: bool = True
 
 
 class ExecutionSection(_Strict):
@@ -368,7 +370,7 @@ class Study:
             problems.append(("solver.step", f"step {step:g} s exceeds the output sample period "
                                             f"{1 / self.excitation.fs:g} s"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
-                              halvings=s.halvings)
+                              halvings=s.halvings, auto_step=s.auto_step)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

@@ -80,15 +80,23 @@ class Signals:
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Time integration settings that enter the run hash."""
+    """Time integration settings that enter the run hash.
+
+    ``step`` is the largest step; a model may take a smaller one: always one that divides
+    the output sample period, and with ``auto_step`` one that keeps the fastest eigenvalues
+    of the run's own parameters within the integrator's accuracy limits
+    (:mod:`sensfw.models.stepsize`). The step a run used is in ``signals.meta["step"]``.
+    """
 
     method: str = "RK44"
     step: float = 1e-5
     timeout: float | None = None  # wall seconds per run; None = no limit
     halvings: int = 1  # retries with half the step after a divergence (explicit stability)
+    auto_step: bool = True
 
     def to_dict(self) -> dict:
-        return {"method": self.method, "step": self.step, "halvings": self.halvings}
+        return {"method": self.method, "step": self.step, "halvings": self.halvings,
+                "auto_step": self.auto_step}
 
 
 class Model(ABC):

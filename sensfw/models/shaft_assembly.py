@@ -40,7 +40,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import DivergenceError, SimulationError
+from ..errors import DivergenceError, ParameterError, SimulationError
 from ..excitation import Chirp
 from ..params import Parameter, ParameterSet
 from ..plugins import models
@@ -53,6 +53,7 @@ from .contact import (
     stiffness_si,
     symbolic_ops,
 )
+from .stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
 
 G = 9.81
 MM = 1e-3  # m per mm
@@ -321,6 +322,11 @@ class ShaftAssembly(Model):
 
         mu_s, mu_d = p["slide_mu_static"], p["slide_mu_dynamic"]
         v_s, v_t = p["slide_v_stiction"] * MM, p["slide_v_friction"] * MM
+        if not v_s < v_t:
+            raise ParameterError(
+                f"slide_v_stiction ({p['slide_v_stiction']:g} mm/s) must be below "
+                f"slide_v_friction ({p['slide_v_friction']:g} mm/s): Eq. 3 blends the static "
+                "into the dynamic coefficient between the two (group them to move together)")
 
         def slide(j, flange):
             def law(ops, u, v, contact):
@@ -558,13 +564,16 @@ class ShaftAssembly(Model):
         p = self.parameters().complete(params)
         exu.config.printToConsole = False
         t0 = time.perf_counter()
-        built = self.build(p, excitation, user_functions=user_functions)
+        q0 = self.equilibrium(p)
+        choice = self.time_step(p, excitation.fs, solver, q0)
+        built = self.build(p, excitation, q0=q0, user_functions=user_functions)
         mbs, SC = built.mbs, built.SC
         n_out = excitation.n_samples
         t_end = n_out / excitation.fs
         ss = exu.SimulationSettings()
         ss.timeIntegration.endTime = t_end
-        ss.timeIntegration.numberOfSteps = round(t_end / solver.step)
+        ss.timeIntegration.numberOfSteps = n_out * choice.substeps
+        ss.timeIntegration.automaticStepSize = False  # fixed steps on the output grid
         ss.timeIntegration.verboseMode = 0
         ss.timeIntegration.explicit.computeEndOfStepAccelerations = False
         ss.timeIntegration.discontinuous.useRecommendedStepSize = False
@@ -585,15 +594,29 @@ class ShaftAssembly(Model):
             SC.Reset()
         for name, x in channels.items():
             if len(x) != n_out or not np.all(np.isfinite(x)):
-                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p)
+                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p,
+                                      step=choice.step)
             if np.max(np.abs(x)) > 1e7:
-                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p)
+                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p,
+                                      step=choice.step)
         t = excitation.time()
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),
                        units={"force": "N", **{c: "m/s^2" for c in channels}},
-                       meta={"model": self.name, "wall_s": time.perf_counter() - t0},
+                       meta={"model": self.name, "wall_s": time.perf_counter() - t0,
+                             **choice.to_meta()},
                        sweep_end=excitation.duration)
+
+    def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings,
+                  q0: np.ndarray | None = None) -> StepChoice:
+        """The RK4 step of a run (:mod:`sensfw.models.stepsize`): at most ``solver.step``,
+        dividing the sample period ``1/fs``, and with ``solver.auto_step`` small enough for
+        the fastest eigenvalues of the model linearised at its static state ``q0`` (the
+        stick band of the slide-bearing friction, over-damped and stiff contacts)."""
+        if not solver.auto_step:
+            return grid_step(solver.step, fs)
+        M, K, D = self.linear_matrices(p, q0)
+        return explicit_step(first_order_eigenvalues(M, K, D), solver.step, fs)
 
 
 class NonlinearContacts:

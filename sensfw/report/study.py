@@ -201,6 +201,21 @@ def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
     return frame, sig
 
 
+def _step_note(result) -> str:
+    """How many runs took a smaller step than the study's, and why (auto_step)."""
+    from ..pipeline import run_step
+
+    steps = [run_step(result.runner, k) for st in result.stages for k in st.keys]
+    smaller = [s for s in steps if s.get("step", result.study.solver.step)
+               < result.study.solver.step * (1 - 1e-9)]
+    if not smaller:
+        return ""
+    why = sorted({s.get("step_limited_by", "divergence") for s in smaller})
+    return (f" {len(smaller)} of {len(steps)} runs used a smaller step (down to "
+            f"{min(s['step'] for s in smaller) * 1e6:.3g} µs), set per run so that RK4 resolves "
+            f"the model's fastest linearised eigenvalues (limited by: {'; '.join(why)}).")
+
+
 def write_study_report(result, path: str | Path) -> Path:
     study = result.study
     ex = study.excitation
@@ -208,7 +223,8 @@ def write_study_report(result, path: str | Path) -> Path:
     page = Page(f"sensfw study report: {study.name}", study.spec.study.description)
     page.p(f"Model {study.spec.model.name}, output channel {study.output}; log chirp "
            f"{ex.f0:g} Hz -> {ex.f1:g} Hz in {ex.duration:g} s at {ex.fs:g} Hz, amplitude "
-           f"{ex.amplitude:g} N; solver {study.solver.method}, step {study.solver.step:g} s.")
+           f"{ex.amplitude:g} N; solver {study.solver.method}, step {study.solver.step:g} s."
+           + _step_note(result))
     page.p(f"Runs: {c.total} in total, {c.new} computed now, {c.cached} from the run store, "
            f"{c.failed} failed.")
     if c.failed:

@@ -93,22 +93,28 @@ def simulate_with_halving(model: Model, params: dict, excitation: Chirp,
                           solver: SolverSettings) -> Signals:
     """``model.simulate``, retried with half the step after a divergence, up to
     ``solver.halvings`` times: an explicit integrator at a fixed step is only stable while
-    step x highest eigenfrequency stays small, and stiff corners of a design space (several
-    contact stiffnesses at their maxima) can cross that limit. The step actually used is in
-    ``signals.meta["step"]``; a run that diverges at every step fails with all steps named."""
+    step x highest eigenfrequency stays small; a model that chooses its step from its
+    linearisation (``auto_step``) rarely gets here, but the dynamics can stiffen beyond the
+    static estimate. The retry halves the step that diverged (``err.step`` where the model
+    reports it). The step actually used is in ``signals.meta["step"]``; a run that diverges
+    at every step fails with all steps named."""
     step, tried = solver.step, []
     while True:
         try:
             signals = model.simulate(params, excitation, replace(solver, step=step))
         except DivergenceError as err:
-            tried.append(step)
+            used = err.step or step
+            tried.append(used)
             if len(tried) > solver.halvings:
                 steps = ", ".join(f"{h:g}" for h in tried)
                 raise DivergenceError(err.model, f"{err.reason} at step {steps} s",
-                                      err.parameters) from None
-            step /= 2
+                                      err.parameters, step=used) from None
+            step = used / 2
         else:
-            signals.meta.update(step=step, step_halvings=len(tried))
+            signals.meta.setdefault("step", step)
+            signals.meta["step_halvings"] = len(tried)
+            if tried:  # the step that diverged last is twice the step used
+                signals.meta["step_limited_by"] = "divergence"
             return signals
 
 

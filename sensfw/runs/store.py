@@ -97,7 +97,8 @@ class RunStore:
             data = buf.getvalue()
             _atomic_write(data_path, data)
             meta["sha256"] = hashlib.sha256(data).hexdigest()
-            for k in ("step", "step_halvings"):  # the step actually used (divergence retries)
+            # the step actually used: chosen by the model (auto_step), halved after divergence
+            for k in ("step", "substeps", "step_limited_by", "step_halvings"):
                 if k in result.signals.meta:
                     meta[k] = result.signals.meta[k]
         else:

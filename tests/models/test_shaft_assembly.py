@@ -39,6 +39,11 @@ def test_parameters_are_table_1_plus_preload():
     assert len(DesignSpace.from_parameters(PARAMETERS, GROUPS)) == 19  # Sect. 3.1
     with pytest.raises(ParameterError, match=r"slide_damping.*outside its bounds"):
         ShaftAssembly().simulate({"slide_damping": 1000.0}, Chirp(50, 5000, 0.01, 20000))
+    # both inside their bounds, but Eq. 3 needs the stiction velocity below the friction one
+    with pytest.raises(ParameterError, match=r"slide_v_stiction \(0.5 mm/s\) must be below "
+                                             r"slide_v_friction \(0.5 mm/s\)"):
+        ShaftAssembly().simulate({"slide_v_stiction": 0.5, "slide_v_friction": 0.5},
+                                 Chirp(50, 5000, 0.01, 20000))
 
 
 def test_nominal_run_has_three_resonances_in_band(nominal_1s):
@@ -101,22 +106,46 @@ CORNERS = {
     "nominal": NOMINAL,
     "all-min": {k: p.min for k, p in PARAMETERS.items()},
     "all-max": {k: p.max for k, p in PARAMETERS.items()},
+    # the screen run with the stiffest stick-slip friction of Table 1
+    "v-min": {**NOMINAL, "slide_v_stiction": 0.01, "slide_v_friction": 0.1},
 }
+SHORT = Chirp(50, 5000, 0.3, 20000, AMP_NOMINAL, tail=0.05)
+
+
+def step_change(params, solver):
+    """FRF change (dB RMS) and relative THD change when the step a run used is halved."""
+    m = ShaftAssembly()
+    out, steps = [], []
+    for settings in (solver, None):
+        if settings is None:
+            settings = SolverSettings(step=steps[0] / 2, auto_step=False)
+        sig = m.simulate(params, SHORT, settings)
+        steps.append(sig.meta["step"])
+        _, H = axial_frf(sig, nperseg=1024)
+        s = sig.sweep()
+        out.append((20 * np.log10(np.abs(H)), thd(s.channels["crank_axial"], s.fs, s.f_inst)))
+    assert steps[1] == pytest.approx(steps[0] / 2)
+    rms_db = float(np.sqrt(np.mean((out[0][0] - out[1][0]) ** 2)))
+    return rms_db, abs(out[0][1] - out[1][1]) / out[1][1], steps[0]
 
 
 @pytest.mark.parametrize("corner", list(CORNERS))
 def test_halving_the_time_step_changes_little(corner):
-    m = ShaftAssembly()
-    ex = Chirp(50, 5000, 0.3, 20000, AMP_NOMINAL, tail=0.05)
-    out = []
-    for h in (1e-5, 5e-6):
-        sig = m.simulate(CORNERS[corner], ex, SolverSettings(step=h))
-        _, H = axial_frf(sig, nperseg=1024)
-        s = sig.sweep()
-        out.append((20 * np.log10(np.abs(H)), thd(s.channels["crank_axial"], s.fs, s.f_inst)))
-    rms_db = np.sqrt(np.mean((out[0][0] - out[1][0]) ** 2))
+    """Default settings (the step the model picks for the run) against half that step.
+    The full 1 s chirp is bench/convergence.py."""
+    rms_db, d_thd, _ = step_change(CORNERS[corner], SolverSettings())
     assert rms_db < 0.5, rms_db
-    assert abs(out[0][1] - out[1][1]) / out[1][1] < 0.05, (out[0][1], out[1][1])
+    assert d_thd < 0.05, d_thd
+
+
+def test_the_stiff_friction_corner_needs_the_automatic_step():
+    """At a fixed 10 us RK4 is unstable in the stick band of the friction at v-min
+    (|lambda h| = 4.1) and chatters; the automatic step is what makes the case above pass."""
+    rms_db, d_thd, h = step_change(CORNERS["v-min"], SolverSettings(auto_step=False))
+    assert h == 1e-5 and rms_db > 5.0 and d_thd > 1.0, (rms_db, d_thd)
+    sig = ShaftAssembly().simulate(CORNERS["v-min"], Chirp(50, 5000, 0.01, 20000))
+    assert sig.meta["step_limited_by"] == "real eigenvalue"
+    assert sig.meta["real_lambda_h"] <= 0.6 and sig.meta["step"] < 2e-6
 
 
 def test_deterministic_in_process_and_across_workers():
@@ -125,21 +154,27 @@ def test_deterministic_in_process_and_across_workers():
 
     m = ShaftAssembly()
     ex = Chirp(50, 5000, 0.05, 20000, AMP_NOMINAL)
-    a = m.simulate(NOMINAL, ex)
-    b = m.simulate(NOMINAL, ex)
-    spec = RunSpec.create(m, NOMINAL, ex, SolverSettings())
-    got = []
-    run_processes([spec], lambda s, r: got.append(r), workers=1)
-    c = got[0].signals
-    for ch in m.sensors:
-        assert np.array_equal(a.channels[ch], b.channels[ch])
-        assert np.array_equal(a.channels[ch], c.channels[ch])
+    # nominal (10 us) and all-min, whose step the linearised eigenvalues choose
+    cases = [NOMINAL, CORNERS["all-min"]]
+    specs = [RunSpec.create(m, params, ex, SolverSettings()) for params in cases]
+    got = {}
+    run_processes(specs, lambda s, r: got.update({s.key(): r}), workers=1)
+    for params, spec in zip(cases, specs, strict=True):
+        a, b = m.simulate(params, ex), m.simulate(params, ex)
+        c = got[spec.key()].signals
+        assert a.meta["step"] == c.meta["step"]
+        for ch in m.sensors:
+            assert np.array_equal(a.channels[ch], b.channels[ch])
+            assert np.array_equal(a.channels[ch], c.channels[ch])
+    assert got[specs[1].key()].signals.meta["step"] < 1e-5
 
 
 def test_divergence_is_one_clear_error_and_silent(capfd):
     m = ShaftAssembly()
     with pytest.raises(SimulationError) as info:
-        m.simulate(NOMINAL, Chirp(50, 5000, 0.05, 20000, 1.0), SolverSettings(step=5e-5))
+        # a fixed step far beyond RK4's stability (the automatic step would refuse it)
+        m.simulate(NOMINAL, Chirp(50, 5000, 0.05, 20000, 1.0),
+                   SolverSettings(step=5e-5, auto_step=False))
     msg = str(info.value)
     assert "shaft_assembly simulation failed" in msg and "slide_damping=234" in msg
     captured = capfd.readouterr()
@@ -159,8 +194,10 @@ STIFF_CORNER = {
 
 
 def test_a_stiff_corner_that_diverges_at_the_step_is_rerun_at_half_the_step(tmp_path):
-    """RK4 at 10 us is unstable at this corner; one halving cures it, the step used is
-    recorded, and with no halving allowed the failure names the step."""
+    """With the step fixed, RK4 at 10 us is unstable at this corner (a contact mode at
+    |lambda h| = 2.97, beyond RK4's 2.83); one halving cures it, the step used is recorded,
+    and with no halving allowed the failure names the step. With the automatic step (the
+    default) the linearisation predicts it and the first attempt succeeds."""
     import json
 
     from sensfw.runs import RunStore
@@ -171,12 +208,20 @@ def test_a_stiff_corner_that_diverges_at_the_step_is_rerun_at_half_the_step(tmp_
               for n in names}
     params = PARAMETERS.complete(params)
     ex = Chirp(50, 5000, 0.05, 20000, AMP_NOMINAL)
-    strict = execute(RunSpec.create(m, params, ex, SolverSettings(step=1e-5, halvings=0)))
+    fixed = {"step": 1e-5, "auto_step": False}
+    strict = execute(RunSpec.create(m, params, ex, SolverSettings(**fixed, halvings=0)))
     assert not strict.ok and "diverged" in strict.error and "at step 1e-05 s" in strict.error
-    spec = RunSpec.create(m, params, ex, SolverSettings(step=1e-5, halvings=1))
+    spec = RunSpec.create(m, params, ex, SolverSettings(**fixed, halvings=1))
     res = execute(spec)
     assert res.ok, res.error
     assert res.signals.meta["step"] == 5e-6 and res.signals.meta["step_halvings"] == 1
+    assert res.signals.meta["step_limited_by"] == "divergence"
     assert all(np.all(np.isfinite(x)) for x in res.signals.channels.values())
     RunStore(tmp_path).save(spec, res)
     assert json.loads((tmp_path / f"{spec.key()}.json").read_text())["step"] == 5e-6
+
+    auto = execute(RunSpec.create(m, params, ex, SolverSettings(halvings=0)))
+    assert auto.ok, auto.error
+    meta = auto.signals.meta
+    assert meta["step_halvings"] == 0 and meta["step"] < 5e-6
+    assert meta["oscillatory_lambda_h"] <= 1.5 and meta["real_lambda_h"] <= 0.6

@@ -28,6 +28,9 @@ def test_key_depends_on_everything_that_changes_results():
     other_solver = RunSpec.create(models.get("two_dof")(), dict(base.params), EX,
                                   SolverSettings(step=2e-6))
     assert other_solver.key() != base.key()
+    fixed = RunSpec.create(models.get("two_dof")(), dict(base.params), EX,
+                           SolverSettings(auto_step=False))
+    assert fixed.key() != base.key()
     # the timeout is not part of the result, so not part of the key
     timed = RunSpec.create(models.get("two_dof")(), dict(base.params), EX,
                            SolverSettings(timeout=10.0))

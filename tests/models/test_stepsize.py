@@ -1,0 +1,70 @@
+"""The explicit step of a run (sensfw.models.stepsize) on systems whose eigenvalues are known
+in closed form, and RK4's own stability function at the limits it uses."""
+
+import numpy as np
+import pytest
+
+from sensfw.models.stepsize import (
+    OSCILLATORY_LIMIT,
+    REAL_LIMIT,
+    explicit_step,
+    first_order_eigenvalues,
+    grid_step,
+)
+
+FS = 20000.0  # Hz; sample period 50 us
+
+
+@pytest.mark.parametrize("step_max, k", [(1e-5, 5), (3e-6, 17), (5e-5, 1), (2e-5, 3),
+                                         (1e-4, 1), (5e-6, 10)])
+def test_grid_step_is_the_largest_divisor_of_the_sample_period(step_max, k):
+    got = grid_step(step_max, FS)
+    assert got.substeps == k
+    assert got.step == pytest.approx(1 / (FS * k), rel=1e-15)
+    assert got.step <= min(step_max, 1 / FS) * (1 + 1e-12)
+    # the next larger divisor would exceed the requested step (or the sample period)
+    assert k == 1 or 1 / (FS * (k - 1)) > step_max
+
+
+def test_undamped_oscillator_limits_the_step_by_its_frequency():
+    w = 2.0e5  # rad/s; eigenvalues +-i w
+    lam = first_order_eigenvalues(np.eye(1), np.array([[w**2]]), np.zeros((1, 1)))
+    np.testing.assert_allclose(np.sort(lam.imag), [-w, w], rtol=1e-12)
+    got = explicit_step(lam, 1e-5, FS)
+    # OSCILLATORY_LIMIT / w = 7.5 us -> 50 us / 7 = 7.14 us
+    assert got.limited_by == "oscillatory eigenvalue" and got.substeps == 7
+    assert got.oscillatory_lambda_h == pytest.approx(w / (FS * 7))
+    assert got.oscillatory_lambda_h <= OSCILLATORY_LIMIT
+
+
+def test_viscous_element_limits_the_step_on_the_real_axis():
+    c, m = 3.0e5, 1.0  # eigenvalues 0 and -c/m (a mass on a damper: friction's stick band)
+    lam = first_order_eigenvalues(np.eye(1) * m, np.zeros((1, 1)), np.array([[c]]))
+    np.testing.assert_allclose(np.sort(lam.real), [-c / m, 0.0], atol=1e-6)
+    got = explicit_step(lam, 1e-5, FS)
+    assert got.limited_by == "real eigenvalue"
+    assert got.substeps == 25 and got.step == pytest.approx(2e-6)  # 0.6 / 3e5 = 2 us
+    assert got.real_lambda_h == pytest.approx(REAL_LIMIT)
+
+
+def test_a_soft_system_keeps_the_requested_step():
+    lam = first_order_eigenvalues(np.eye(1), np.array([[1e6]]), np.array([[10.0]]))
+    got = explicit_step(lam, 1e-5, FS)
+    assert got.limited_by == "solver.step" and got.substeps == 5
+
+
+def rk4_amplification(z):
+    """RK4's stability function R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24."""
+    return 1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24
+
+
+def test_limits_sit_inside_rk4_stability_with_accuracy_to_spare():
+    # real axis: stable for |z| < 2.785; at the limit one step decays within 0.11 % of
+    # exp(z) (local error z^5/120 relative to exp(z))
+    assert abs(rk4_amplification(-REAL_LIMIT) / np.exp(-REAL_LIMIT) - 1) < 1.1e-3
+    # the friction-velocity-min corner of Table 1 at 10 us (|lambda h| = 4.06) is unstable
+    assert abs(rk4_amplification(-4.06)) > 1
+    # imaginary axis: stable for |z| < 2 sqrt(2); at the limit |R| loses < 6 % per step
+    r = abs(rk4_amplification(1j * OSCILLATORY_LIMIT))
+    assert 0.94 < r < 1.0
+    assert abs(rk4_amplification(1j * 2.97)) > 1  # the stiff corner's mode at 10 us
