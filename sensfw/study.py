@@ -37,6 +37,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .errors import SensfwError, StudyError, UnknownPluginError
 from .excitation import Chirp
 from .models.base import Model, SolverSettings
+from .models.stepsize import CALIBRATED_METHODS
 from .params import DesignSpace, ParameterSet
 
 Quantity = str | float | int
@@ -369,6 +370,11 @@ class Study:
         if self.excitation is not None and step > 1 / self.excitation.fs:
             problems.append(("solver.step", f"step {step:g} s exceeds the output sample period "
                                             f"{1 / self.excitation.fs:g} s"))
+        if s.auto_step and s.method not in CALIBRATED_METHODS:
+            problems.append(("solver.auto_step", f"the automatic step is calibrated for "
+                             f"{', '.join(CALIBRATED_METHODS)}, not {s.method} (whose stability "
+                             "region is smaller): set auto_step = false and a step that "
+                             f"suits {s.method}, or use RK44"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
                               halvings=s.halvings, auto_step=s.auto_step)
 

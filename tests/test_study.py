@@ -86,6 +86,19 @@ def test_unknown_effect_in_model_options():
     assert "cannot attach to 'moon'" in problems(data)["model.options"]
 
 
+def test_automatic_step_only_with_the_integrators_it_is_calibrated_for():
+    """The step limits (models/stepsize.py) hold inside RK4's stability region; explicit
+    Euler is unstable on the imaginary axis at any step, so auto_step must not pretend."""
+    data = copy.deepcopy(QUICK)
+    data["solver"] = {"method": "ExplicitEuler"}
+    assert "calibrated for RK44, RK67, DOPRI5, not ExplicitEuler" in \
+        problems(data)["solver.auto_step"]
+    data["solver"]["auto_step"] = False
+    assert not Study.from_dict(data, "x.toml").solver.auto_step
+    data["solver"] = {"method": "RK67"}
+    assert Study.from_dict(data, "x.toml").solver.auto_step
+
+
 def test_missing_sections_and_bad_toml(tmp_path):
     got = problems({"stages": []})
     assert "study" in got and "stages" in got

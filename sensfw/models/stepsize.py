@@ -37,6 +37,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: Integrators the limits hold for (RK4 and the higher-order methods, whose stability
+#: regions contain RK4's); a study with ``auto_step`` and another method is refused.
+CALIBRATED_METHODS = ("RK44", "RK67", "DOPRI5")
 #: Largest ``|lambda| h`` for real-axis (over-damped: ``|Im| <= |Re|``) eigenvalues.
 REAL_LIMIT = 0.6
 #: Largest ``|lambda| h`` for oscillatory eigenvalues.
