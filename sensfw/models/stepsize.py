@@ -84,16 +84,22 @@ def first_order_eigenvalues(M: np.ndarray, K: np.ndarray, D: np.ndarray) -> np.n
     return np.linalg.eigvals(A)
 
 
+def spectral_radii(eigenvalues: np.ndarray) -> tuple[float, float]:
+    """Largest ``|lambda|`` (1/s) of the real-axis (over-damped, ``|Im| <= |Re|``) and of the
+    oscillatory eigenvalues; 0 where there are none."""
+    lam = np.asarray(eigenvalues, complex)
+    lam = lam[np.isfinite(lam)]
+    real = np.abs(lam.imag) <= np.abs(lam.real)
+    return (float(np.max(np.abs(lam[real]), initial=0.0)),
+            float(np.max(np.abs(lam[~real]), initial=0.0)))
+
+
 def explicit_step(eigenvalues: np.ndarray, step_max: float, fs: float,
                   real_limit: float = REAL_LIMIT,
                   oscillatory_limit: float = OSCILLATORY_LIMIT) -> StepChoice:
     """The largest RK4 step ``1/(fs k) <= step_max`` that keeps ``|lambda| h`` of every
     eigenvalue within its limit (see the module docstring)."""
-    lam = np.asarray(eigenvalues, complex)
-    lam = lam[np.isfinite(lam)]
-    real = np.abs(lam.imag) <= np.abs(lam.real)
-    rho_real = float(np.max(np.abs(lam[real]), initial=0.0))
-    rho_osc = float(np.max(np.abs(lam[~real]), initial=0.0))
+    rho_real, rho_osc = spectral_radii(eigenvalues)
     bounds = {"solver.step": step_max}
     if rho_real > 0:
         bounds["real eigenvalue"] = real_limit / rho_real
