@@ -455,5 +455,31 @@ def plugins() -> None:
     out.print(table)
 
 
+@app.command()
+@_user_errors
+def places(
+    model: Annotated[str, typer.Argument(help="model name (see `sensfw plugins`)")] =
+    "shaft_assembly",
+) -> None:
+    """The places of a model where effects can attach, and the effects that fit each."""
+    from .models.places import fitting_places
+    from .plugins import effects, models
+
+    places_ = models.get(model)().places()
+    if not places_:
+        out.print(f"model {model!r} declares no places")
+        return
+    fits: dict[str, list[str]] = {name: [] for name in places_}
+    for name in effects.names():
+        for place in fitting_places(places_, effects.get(name)):
+            fits[place].append(name)
+    table = Table(title=f"places of {model}")
+    for col in ("place", "kind", "description", "effects that fit"):
+        table.add_column(col)
+    for name, pl in places_.items():
+        table.add_row(name, pl.kind, pl.description, ", ".join(fits[name]))
+    out.print(table)
+
+
 def main() -> None:  # pragma: no cover
     sys.exit(app())

@@ -12,6 +12,7 @@ whose instantaneous frequency is ``f0 exp(k t)`` with ``k = ln(f1/f0)/T``, exact
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -99,6 +100,14 @@ class Chirp:
         t = self.time() if t is None else np.asarray(t, dtype=float)
         f = self.amplitude * np.sin(chirp_phase(t, self.f0, self.f1, self.duration))
         return np.where(t < self.duration, f, 0.0)
+
+    def force_expression(self, ops, t):
+        """The force as an expression of time ``t`` for a model's load function (``ops``:
+        :func:`sensfw.models.contact.symbolic_ops` for Exudyn, or numpy), zero after the
+        sweep."""
+        k = self.k
+        phase = (2.0 * math.pi * self.f0 / k) * (ops.exp(k * t) - 1.0)
+        return ops.where(t < self.duration, self.amplitude * ops.sin(phase), 0.0)
 
     def f_inst(self, t: np.ndarray | None = None) -> np.ndarray:
         """Instantaneous frequency; held at ``f1`` during the tail."""

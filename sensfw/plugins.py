@@ -12,7 +12,7 @@ models: Registry = Registry("model", "sensfw.models", ("sensfw.models",))
 designs: Registry = Registry("design", "sensfw.designs", ("sensfw.designs",))
 scorers: Registry = Registry("scorer", "sensfw.scorers", ("sensfw.scorers",))
 surrogates: Registry = Registry("surrogate", "sensfw.surrogates", ("sensfw.surrogates",))
-effects: Registry = Registry("effect", "sensfw.effects", ("sensfw.models.effects",))
+effects: Registry = Registry("effect", "sensfw.effects", ("sensfw.effects",))
 
 ALL: dict[str, Registry] = {
     "models": models,

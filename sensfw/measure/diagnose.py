@@ -29,12 +29,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import SensfwError
+from ..models.places import fitting_places
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
 from .compare import compare_level
 from .io import Measurement
 from .session import Variant, simulate
+from .synthetic import model_with_effects
 
 THD_WEIGHT = 3.0
 
@@ -227,6 +229,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     ``refine_iterations`` compass steps before the final ranking."""
     ev = Evaluator(study, measurements, runner)
     names = list(candidates) if candidates else effect_registry.names()
+    places = model_with_effects(study, []).places()
     base_cmp = ev.comparisons([Variant()], "baseline")[0]
     if base_cmp is None:
         raise SensfwError("the study's model failed at the measured level(s); nothing to "
@@ -236,7 +239,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     cands: dict[tuple[str, str], tuple] = {}
     for name in names:
         cls = effect_registry.get(name)
-        for attach in cls.attach_points:
+        for attach in fitting_places(places, cls):
             log(f"candidate {name}@{attach}")
             eff = cls(attach=attach)
             cand = calibrate(ev, eff.spec(), eff.parameters(), f"{name}",
@@ -348,6 +351,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     ev = Evaluator(study, measurements, runner)
     cls = effect_registry.get(effect)
     eff = cls(attach=attach)
+    model_with_effects(study, [eff])  # resolves (and checks) where the effect attaches
     spec = eff.spec()
     params = eff.parameters()
     base_cmp = ev.comparisons([Variant()], "baseline")[0]

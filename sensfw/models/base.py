@@ -11,6 +11,7 @@ import numpy as np
 from ..errors import SignalError
 from ..excitation import Chirp
 from ..params import ParameterSet
+from .places import Place
 
 
 @dataclass
@@ -121,6 +122,10 @@ class Model(ABC):
 
     def options(self) -> dict:
         """Model options that change results (enter the run hash)."""
+        return {}
+
+    def places(self) -> dict[str, Place]:
+        """Where effects can act (:mod:`sensfw.models.places`); none by default."""
         return {}
 
     @abstractmethod

@@ -3,8 +3,10 @@
 These functions take and return ``exudyn.symbolic.Real`` expressions (or plain floats, for
 testing with numbers), so the whole contact set of a model compiles into one symbolic user
 function that Exudyn evaluates in C++ during time integration; no Python runs in the time
-loop. The same functions evaluate with numpy through :mod:`sensfw.models.contact_numpy`-style
-callers because they only use ``+ - * /`` and the small set of functions passed as ``ops``.
+loop. The same functions evaluate with numpy (:func:`numpy_ops`) for the static equilibrium
+and the linearisation, because they only use ``+ - * /`` and the small set of functions
+passed as ``ops``. :class:`PenaltyLaw` bundles Eqs. 2-3 as the
+:class:`~sensfw.models.places.ContactLaw` of a contact place.
 
 Units: all arguments in SI (m, m/s, N); stiffness ``k`` in N/m^b (see
 :func:`stiffness_si`).
@@ -113,19 +115,44 @@ def stiffness_si(k_n_per_mm: float, b: float) -> float:
 
 
 @dataclass(frozen=True)
-class ContactLaw:
-    """Normal law of one contact in SI units."""
+class Friction:
+    """Regularised stick-slip friction (Eq. 3): the tangential force on the sliding body is
+    ``-mu(v) fn`` for the slip velocity ``v`` and the normal force magnitude ``fn``."""
+
+    mu_s: float
+    mu_d: float
+    v_s: float  # m/s, stiction transition velocity
+    v_t: float  # m/s, friction transition velocity
+
+    def force(self, ops, fn: Expr, v: Expr) -> Expr:
+        return -friction_coefficient(ops, v, self.mu_s, self.mu_d, self.v_s, self.v_t) * fn
+
+
+@dataclass(frozen=True)
+class PenaltyLaw:
+    """Penalty contact law of Eq. 2 in SI units, optionally with friction (Eq. 3); a
+    :class:`~sensfw.models.places.ContactLaw`."""
 
     k: float  # N/m^b
     b: float
     c: float  # N s/m
     dmax: float  # m
+    friction: Friction | None = None
 
-    def force(self, ops, delta: Expr, delta_dot: Expr) -> Expr:
+    def normal(self, ops, delta: Expr, delta_dot: Expr) -> Expr:
         return impact_force(ops, delta, delta_dot, self.k, self.b, self.c, self.dmax)
 
-    def clearance(self, ops, e: Expr, e_dot: Expr, gap: float) -> Expr:
-        return clearance_force(ops, e, e_dot, gap, self.k, self.b, self.c, self.dmax)
+    def tangential(self, ops, fn: Expr, v: Expr) -> Expr | None:
+        return None if self.friction is None else self.friction.force(ops, fn, v)
+
+    def linearized(self, delta0: float) -> tuple[float, float, float]:
+        """(force, tangent stiffness ``k b delta0^(b-1)``, damping of Eq. 2) at the static
+        penetration ``delta0`` (all zero when open)."""
+        if delta0 <= 0:
+            return 0.0, 0.0, 0.0
+        ops = numpy_ops()
+        return (self.k * delta0**self.b, self.k * self.b * delta0 ** (self.b - 1.0),
+                float(self.c * step(ops, delta0, 0.0, 0.0, self.dmax, 1.0)))
 
     def static_deflection(self, force: float) -> float:
         """Penetration (m) that carries ``force`` N statically."""

@@ -1,0 +1,94 @@
+"""The effect contract: physics added at a named place of any model (plugin group
+``sensfw.effects``).
+
+An effect lists the kinds of place it fits (``fits``), the parameters it adds (with bounds,
+in the paper's units) and what it leaves in a measurement (``signatures`` in words for the
+reports, ``signature_classes`` for :mod:`sensfw.measure` to decide which candidates a
+measurement allows). :meth:`Effect.apply` implements the physics through the hooks the model
+offers at that place (:class:`sensfw.models.places.Hooks`): replace or wrap the place's
+contact law, add a force element, add a body, add mass. Every place of a fitting kind is a
+valid attach point, so diagnosis can try each.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from typing import ClassVar
+
+from ..models.places import Hooks, Place
+from ..params import Parameter
+
+#: Amplitude-dependence classes of a nonlinear structure's response (Kerschen, Worden,
+#: Vakakis & Golinval 2006, Sect. 3; Worden & Tomlinson 2001, Ch. 2-3), as the measurement
+#: loop classifies them from several excitation levels.
+SIGNATURE_CLASSES = {
+    "amplitude_independent": "resonances and damping do not change with level (added mass, "
+                             "an extra mode, linear damping)",
+    "softening": "resonances move down and damping grows with level (micro-slip friction, "
+                 "contacts that open)",
+    "hardening": "resonances move up with level (contact hardening, clearance above its gap)",
+    "even_harmonics": "even harmonics or a DC shift (asymmetric contact, preload)",
+    "new_peak": "a resonance the model lacks (an extra mode)",
+}
+
+
+class Effect(ABC):
+    """Base class of effects. ``attach`` names the place (``None``: the first of
+    ``preferred_places`` the model has, or its only fitting place)."""
+
+    name: ClassVar[str] = "effect"
+    #: kinds of place (:class:`~sensfw.models.places.Place`) the effect fits
+    fits: ClassVar[tuple[str, ...]] = ()
+    #: places tried first when ``attach`` is not given (names used by the shipped models)
+    preferred_places: ClassVar[tuple[str, ...]] = ()
+    signatures: ClassVar[tuple[str, ...]] = ()
+    signature_classes: ClassVar[frozenset[str]] = frozenset()
+    #: calibration design: values per parameter (default 5 for one parameter, 3 for two)
+    design_levels: ClassVar[dict[str, int]] = {}
+
+    def __init__(self, attach: str | None = None):
+        self.attach = attach
+
+    def parameters(self) -> list[Parameter]:
+        """The parameters the effect adds (paper units, with bounds)."""
+        return []
+
+    @abstractmethod
+    def apply(self, place: Place, hooks: Hooks, p: Mapping[str, float]) -> None:
+        """Add the effect's physics at ``place`` through ``hooks`` for parameter values
+        ``p`` (the model's and the effect's, paper units)."""
+
+    def seeds(self, comparisons) -> list[dict[str, float]]:
+        """Parameter values suggested by the evidence of a model/measurement comparison
+        (added to the calibration design); none by default."""
+        return []
+
+    def spec(self) -> dict:
+        out = {"name": self.name}
+        if self.attach is not None:
+            out["attach"] = self.attach
+        return out
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(attach={self.attach!r})"
+
+
+def make_effect(spec) -> Effect:
+    """An effect from its spec: a name, ``{"name": ..., "attach": ...}`` or an Effect."""
+    from ..errors import SensfwError
+    from ..plugins import effects
+
+    if isinstance(spec, Effect):
+        return spec
+    if isinstance(spec, str):
+        spec = {"name": spec}
+    spec = dict(spec)
+    if "name" not in spec:
+        raise SensfwError(f"effect {spec!r} has no name")
+    cls = effects.get(spec.pop("name"))
+    unknown = set(spec) - {"attach"}
+    if unknown:
+        raise SensfwError(f"effect {cls.name!r}: unknown option(s) {', '.join(sorted(unknown))}"
+                          "; known: attach")
+    return cls(**spec)

@@ -1,0 +1,170 @@
+"""Places of a model, and the hooks through which a physical effect acts there.
+
+A model declares its *places* (:class:`Place`): the contacts, joints and bodies where physics
+can be missing. Each has a *kind* and the geometry an effect needs (the two bodies and points
+it connects, its normal and tangent). An effect (:mod:`sensfw.effects`) lists the kinds of
+place it fits and implements its physics through the :class:`Hooks` the model offers while it
+assembles itself: read or replace the contact law of a contact, add a force element, add a
+body, add mass to a body. The model never looks at effect names, so a third-party effect can
+do all that a built-in does.
+
+Place kinds used by the shipped models:
+
+``"contact"``
+    a unilateral (or two-sided, with play) penalty contact with a :class:`ContactLaw`:
+    normal force from penetration and its rate, tangential force from the normal force and
+    the slip velocity;
+``"body"``
+    a body, with a reference point (``r1`` on ``body1``) and its axes;
+``"joint"``
+    a bilateral connection between two bodies (e.g. a bolted lap joint), also with a
+    :class:`ContactLaw` whose ``normal`` is the force along ``normal``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+from ..errors import SensfwError
+
+Expr = Any  # an exudyn.symbolic.Real expression, or a float/array for numpy evaluation
+Point = tuple[float, float]
+
+#: ``law(ops, u, v) -> (fx, fy)``: force on ``body1`` of a force element for the displacement
+#: ``u`` and velocity ``v`` of its point on ``body1`` relative to its point on ``body0``
+#: (global axes, SI, relative to the reference configuration); ``body0`` gets the opposite.
+ForceLaw = Callable[[Any, tuple, tuple], tuple]
+
+
+@dataclass(frozen=True)
+class Place:
+    """A named place of a model where an effect can act.
+
+    For a contact or a joint, ``body0``/``r0`` and ``body1``/``r1`` are the two bodies and the
+    points (body coordinates, m) it connects, ``normal`` the unit direction along which the
+    contact pushes ``body1`` away from ``body0`` when closed (global, reference
+    configuration) and ``tangent`` the sliding direction. For a body, ``body1``/``r1`` is the
+    body and its reference point (e.g. where a sensor or the shaker sits), ``normal`` and
+    ``tangent`` its transverse and axial axes; ``body0`` is the ground.
+    """
+
+    name: str
+    kind: str
+    description: str = ""
+    body0: str = ""
+    r0: Point = (0.0, 0.0)
+    body1: str = ""
+    r1: Point = (0.0, 0.0)
+    normal: Point = (0.0, 1.0)
+    tangent: Point = (1.0, 0.0)
+
+
+@runtime_checkable
+class ContactLaw(Protocol):
+    """The force law of a contact place (SI units).
+
+    ``normal(ops, delta, delta_dot)`` is the compressive normal force for the penetration
+    ``delta`` (m, positive when closed) and its rate; ``tangential(ops, fn, v)`` is the force
+    along the tangent on ``body1`` for the normal force magnitude ``fn`` and the slip velocity
+    ``v`` of ``body1`` relative to ``body0``, or ``None`` for a frictionless contact.
+    ``linearized(delta0)`` gives ``(force, stiffness, damping)`` at a static penetration (the
+    linear model's tangent spring). ``ops`` supplies ``max, min, pow, where, abs, sign, sin,
+    exp`` for symbolic (Exudyn, evaluated in C++) or numpy evaluation
+    (:mod:`sensfw.models.contact`).
+    """
+
+    def normal(self, ops, delta: Expr, delta_dot: Expr) -> Expr: ...
+
+    def tangential(self, ops, fn: Expr, v: Expr) -> Expr | None: ...
+
+    def linearized(self, delta0: float) -> tuple[float, float, float]: ...
+
+
+class Hooks(Protocol):
+    """What a model offers an effect at its places while it assembles itself.
+
+    ``ground`` names the fixed body. Coordinates are body coordinates (m); forces in N.
+    """
+
+    ground: str
+
+    def contact_law(self, place: str) -> ContactLaw:
+        """The current law of contact (or joint) ``place``."""
+        ...
+
+    def set_contact_law(self, place: str, law: ContactLaw) -> None:
+        """Replace the law of ``place`` (wrap the current one to modify it)."""
+        ...
+
+    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                  law: ForceLaw) -> None:
+        """Add a force element between a point of ``body0`` and a point of ``body1``."""
+        ...
+
+    def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
+        """Add a point mass that starts where the point ``follows = (body, r)`` is."""
+        ...
+
+    def add_mass(self, body: str, mass: float, at: Point) -> None:
+        """Lump ``mass`` (kg) at the point ``at`` into ``body`` (mass and rotary inertia)."""
+        ...
+
+
+class EffectLike(Protocol):
+    """What the model needs to know of an effect (:class:`sensfw.effects.Effect`)."""
+
+    name: str
+    fits: tuple[str, ...]
+    attach: str | None
+
+    def parameters(self) -> list: ...
+
+    def apply(self, place: Place, hooks: Hooks, p: Mapping[str, float]) -> None: ...
+
+
+def fitting_places(places: Mapping[str, Place], effect: EffectLike | type) -> list[str]:
+    """Names of the places of kinds ``effect`` fits, in the model's order."""
+    return [n for n, pl in places.items() if pl.kind in effect.fits]
+
+
+def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
+                   model: str) -> list[tuple[EffectLike, Place]]:
+    """Each effect with the place it attaches to.
+
+    ``attach`` must name a place of a kind the effect fits. Without ``attach``, the effect's
+    ``preferred_places`` that the model has come first, then the only fitting place; otherwise
+    the error lists the choices. Two effects that add the same parameter are refused.
+    """
+    out, owners = [], {}
+    for eff in effects:
+        fits = fitting_places(places, eff)
+        if not fits:
+            kinds = sorted({pl.kind for pl in places.values()})
+            raise SensfwError(f"effect {eff.name!r} fits places of kind "
+                              f"{', '.join(eff.fits)}; model {model!r} has places of kind "
+                              f"{', '.join(kinds) or '(none)'}")
+        name = eff.attach
+        if name is None:
+            preferred = [n for n in getattr(eff, "preferred_places", ()) if n in fits]
+            if preferred:
+                name = preferred[0]
+            elif len(fits) == 1:
+                name = fits[0]
+            else:
+                raise SensfwError(f"effect {eff.name!r}: say where (attach = ...); it fits "
+                                  f"{', '.join(fits)} of model {model!r}")
+        elif name not in fits:
+            what = (f"{name!r} is a {places[name].kind}" if name in places
+                    else f"model {model!r} has no place {name!r}")
+            raise SensfwError(f"effect {eff.name!r} cannot attach to {name!r} ({what}); it "
+                              f"fits {', '.join(fits)}")
+        eff.attach = name
+        for p in eff.parameters():
+            if p.name in owners:
+                raise SensfwError(f"effects {owners[p.name]!r} and {eff.name!r}@{name} both "
+                                  f"add parameter {p.name!r}")
+            owners[p.name] = f"{eff.name}@{name}"
+        out.append((eff, places[name]))
+    return out

@@ -1,0 +1,227 @@
+"""A planar assembly of rigid bodies and point masses joined by force elements and contacts.
+
+A model describes itself for one parameter set as a :class:`Mechanism`: its bodies, its force
+elements (:class:`Link`), the laws of its contact places and the places themselves. Effects
+change it through the hooks of :class:`~sensfw.models.places.Hooks`, which
+:class:`Mechanism` implements. The same mechanism is then evaluated with numpy (forces,
+static equilibrium, linearisation: :mod:`sensfw.models.planar.statics`) and built in Exudyn
+(:mod:`sensfw.models.planar.exudyn`).
+
+Coordinates: a rigid body has ``(x, y, theta)``, a point mass ``(x, y)``, each measured from
+its reference position ``ref``; kinematics of body points use small rotations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ...errors import SensfwError
+from ..places import ContactLaw, ForceLaw, Place, Point
+
+G = 9.81  # m/s^2, gravity along -y
+
+
+@dataclass(frozen=True)
+class Body:
+    """A body: planar rigid body (``ndof = 3``: x, y, theta) or point mass (``ndof = 2``);
+    ``ref`` is its reference position (m)."""
+
+    name: str
+    ndof: int
+    mass: float
+    inertia: float = 0.0
+    ref: Point = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Link:
+    """A force element between a point of ``body0`` and a point of ``body1``.
+
+    ``law(ops, u, v, contact)`` gets the displacement ``u = (ux, uy)`` and velocity ``v`` of
+    the point on ``body1`` relative to the point on ``body0`` (global axes, SI) and the
+    contact evaluator (:class:`Contacts`), and returns the force ``(fx, fy)`` on ``body1``
+    (``body0`` gets the opposite). In Exudyn it is one ``ObjectConnectorCartesianSpringDamper``
+    with a symbolic user function.
+    """
+
+    name: str
+    body0: str
+    r0: Point
+    body1: str
+    r1: Point
+    law: Callable
+
+
+class Contacts:
+    """How the force elements evaluate the contact places they contain.
+
+    A link's law calls :meth:`one_sided`, :meth:`two_sided` and :meth:`tangential` with the
+    place's name; this evaluator applies the place's current :class:`ContactLaw` (the
+    nonlinear model). :mod:`~sensfw.models.planar.statics` substitutes evaluators that record
+    the static state or apply the linearised laws.
+    """
+
+    def __init__(self, ops, laws: Mapping[str, ContactLaw]):
+        self.ops, self.laws = ops, laws
+
+    def one_sided(self, place: str, delta, delta_dot):
+        """Normal force of a unilateral contact for the penetration ``delta``."""
+        return self.laws[place].normal(self.ops, delta, delta_dot)
+
+    def two_sided(self, place: str, e, e_dot, gap: float):
+        """Signed force on the moving part of a contact with play ``gap`` on each side of
+        the relative coordinate ``e`` (a shaft in a bore): ``-sign(e) F(|e| - gap)``."""
+        ops = self.ops
+        sgn = ops.sign(e)
+        return -sgn * self.laws[place].normal(ops, ops.abs(e) - gap, sgn * e_dot)
+
+    def tangential(self, place: str, fn, v):
+        """Tangential force for the normal force magnitude ``fn`` and the slip velocity
+        ``v``; ``None`` for a frictionless contact."""
+        return self.laws[place].tangential(self.ops, fn, v)
+
+
+def plus(x, y):
+    """``x + y`` where ``y`` may be ``None`` (nothing to add: no node in the expression)."""
+    return x if y is None else x + y
+
+
+class Layout:
+    """Coordinate layout of a list of bodies: ``offset[name]`` is the index of its x."""
+
+    def __init__(self, bodies: list[Body]):
+        self.bodies = {b.name: b for b in bodies}
+        self.offset, n = {}, 0
+        for b in bodies:
+            self.offset[b.name] = n
+            n += b.ndof
+        self.n = n
+
+    def masses(self) -> np.ndarray:
+        out = []
+        for b in self.bodies.values():
+            out += [b.mass, b.mass] + ([b.inertia] if b.ndof == 3 else [])
+        return np.array(out)
+
+    def y_index(self) -> list[int]:
+        return [self.offset[b] + 1 for b in self.bodies]
+
+    def rotation_index(self) -> list[int]:
+        return [self.offset[b] + 2 for b, body in self.bodies.items() if body.ndof == 3]
+
+
+class State:
+    """Small-rotation kinematics of body points and assembly of generalised forces."""
+
+    def __init__(self, layout: Layout, ground: str, q, qd):
+        self.layout, self.ground, self.q, self.qd = layout, ground, q, qd
+        self.f = np.zeros(layout.n)
+
+    def point(self, body: str, r: Point):
+        """Displacement and velocity (ux, uy, vx, vy) of the body point at ``r``."""
+        if body == self.ground:
+            return 0.0, 0.0, 0.0, 0.0
+        i, q, qd = self.layout.offset[body], self.q, self.qd
+        if self.layout.bodies[body].ndof == 2:
+            return q[i], q[i + 1], qd[i], qd[i + 1]
+        th, thd = q[i + 2], qd[i + 2]
+        return q[i] - th * r[1], q[i + 1] + th * r[0], qd[i] - thd * r[1], qd[i + 1] + thd * r[0]
+
+    def apply(self, body: str, r: Point, fx: float, fy: float) -> None:
+        if body == self.ground:
+            return
+        i = self.layout.offset[body]
+        self.f[i] += fx
+        self.f[i + 1] += fy
+        if self.layout.bodies[body].ndof == 3:
+            self.f[i + 2] += r[0] * fy - r[1] * fx
+
+
+@dataclass
+class Mechanism:
+    """One parameter set's assembly: bodies, links, contact laws by place, places.
+
+    Implements :class:`~sensfw.models.places.Hooks` for effects. ``follows`` records, for
+    bodies added by effects, the body point whose static displacement is their start value.
+    """
+
+    bodies: list[Body]
+    links: list[Link]
+    laws: dict[str, ContactLaw]
+    places: dict[str, Place]
+    ground: str = "H"
+    follows: dict[str, tuple[str, Point]] = field(default_factory=dict)
+
+    # ---- hooks for effects ------------------------------------------------------------------
+    def contact_law(self, place: str) -> ContactLaw:
+        try:
+            return self.laws[place]
+        except KeyError:
+            raise SensfwError(f"place {place!r} has no contact law; contact places: "
+                              f"{', '.join(self.laws)}") from None
+
+    def set_contact_law(self, place: str, law: ContactLaw) -> None:
+        self.contact_law(place)
+        self.laws[place] = law
+
+    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                  law: ForceLaw) -> None:
+        for b in (body0, body1):
+            self._body(b)
+        if any(ln.name == name for ln in self.links):
+            raise SensfwError(f"a force element named {name!r} exists already")
+        self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
+                               lambda ops, u, v, contact: law(ops, u, v)))
+
+    def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
+        if any(b.name == name for b in self.bodies) or name == self.ground:
+            raise SensfwError(f"a body named {name!r} exists already")
+        body, r = follows
+        ref = self._body(body).ref if body != self.ground else (0.0, 0.0)
+        self.bodies.append(Body(name, 2, float(mass), 0.0, (ref[0] + r[0], ref[1] + r[1])))
+        self.follows[name] = (body, tuple(r))
+
+    def add_mass(self, body: str, mass: float, at: Point) -> None:
+        b = self._body(body)
+        extra_inertia = mass * (at[0] ** 2 + at[1] ** 2) if b.ndof == 3 else 0.0
+        self.bodies = [replace(x, mass=x.mass + mass, inertia=x.inertia + extra_inertia)
+                       if x.name == body else x for x in self.bodies]
+
+    def _body(self, name: str) -> Body:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        if name == self.ground:
+            return Body(name, 0, 0.0)
+        raise SensfwError(f"no body {name!r}; bodies: {', '.join(b.name for b in self.bodies)}")
+
+    # ---- evaluation -------------------------------------------------------------------------
+    def layout(self) -> Layout:
+        return Layout(self.bodies)
+
+    def generalized_forces(self, q, qd, contact, ops, layout: Layout | None = None
+                           ) -> np.ndarray:
+        """Link and gravity forces on the coordinates (numpy, SI, no excitation)."""
+        layout = layout or self.layout()
+        st = State(layout, self.ground, np.asarray(q, float), np.asarray(qd, float))
+        for ln in self.links:
+            ux0, uy0, vx0, vy0 = st.point(ln.body0, ln.r0)
+            ux1, uy1, vx1, vy1 = st.point(ln.body1, ln.r1)
+            fx, fy = ln.law(ops, (ux1 - ux0, uy1 - uy0), (vx1 - vx0, vy1 - vy0), contact)
+            st.apply(ln.body1, ln.r1, fx, fy)
+            st.apply(ln.body0, ln.r0, -fx, -fy)
+        iy = layout.y_index()
+        st.f[iy] -= layout.masses()[iy] * G
+        return st.f
+
+    def follow(self, layout: Layout, q: np.ndarray) -> None:
+        """Set the coordinates of bodies added by effects to the displacement of the point
+        they follow (in place)."""
+        for name, (body, r) in self.follows.items():
+            st = State(layout, self.ground, q, np.zeros_like(q))
+            ux, uy, _, _ = st.point(body, r)
+            i = layout.offset[name]
+            q[i:i + 2] = ux, uy

@@ -1,0 +1,194 @@
+"""The benchmark model: a nested output-shaft assembly with contacts, simulated with Exudyn.
+
+An analogue of the paper's e-bike output shaft (Sect. 2.2, Fig. 2, Fig. 6); its mechanics are
+in :mod:`.layout`, its parameters (Table 1) in :mod:`.table1`. The shaker pushes the
+crankshaft radially at its end with the excitation force; accelerometers sit on C (axial, the
+paper's output; radial) and on D (axial, radial).
+
+Every contact is one Exudyn ``ObjectConnectorCartesianSpringDamper`` between two body points
+whose force is a *symbolic* user function (Eqs. 2-3, :mod:`sensfw.models.contact`); Exudyn
+evaluates it in C++ inside its explicit RK4 integrator, with no Python in the time loop
+(``bench/model.py`` compares with the same model built with Python user functions). The same
+force laws evaluate with numpy for the static equilibrium the simulation starts from.
+
+Effects (:mod:`sensfw.effects`) act at the model's places (:func:`.layout.places`) through the
+hooks of :class:`~sensfw.models.planar.Mechanism`; the model applies them without knowing
+their names.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import asdict
+
+import numpy as np
+
+from ...errors import DivergenceError, SimulationError
+from ...excitation import Chirp
+from ...params import ParameterSet
+from ..base import Model, Signals, SolverSettings
+from ..contact import numpy_ops, symbolic_ops
+from ..places import Place, resolve_places
+from ..planar import Contacts, Layout, Mechanism, statics
+from ..planar import exudyn as planar_exudyn
+from ..stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
+from . import layout as mechanics
+from .table1 import GROUPS, PARAMETERS, Geometry
+
+MM = mechanics.MM
+
+
+class ShaftAssembly(Model):
+    """Nested shaft assembly with contacts (see module docstring).
+
+    Parameters
+    ----------
+    linearised : replace every contact by a bilateral linear spring-damper at the static
+        equilibrium (clearances closed, exponents effectively 1, friction off); the
+        reference for the model's linear checks.
+    geometry : fixed model data (enters the run hash).
+    effects : physical effects added at the model's places: names,
+        ``{"name": ..., "attach": ...}`` specs or :class:`sensfw.effects.Effect` objects.
+    """
+
+    name = "shaft_assembly"
+    version = "1"
+    sensors = ("crank_axial", "crank_radial", "drive_axial", "drive_radial")
+    default_output = "crank_axial"
+
+    def __init__(self, linearised: bool = False, geometry: Geometry | None = None,
+                 effects: tuple = ()):
+        from ...effects import make_effect
+
+        self.linearised = bool(linearised)
+        self.geometry = geometry or Geometry()
+        self.effects = tuple(make_effect(e) for e in effects)
+        self._attached = resolve_places(self.places(), self.effects, self.name)
+
+    # ---- declarations ------------------------------------------------------------------------
+    def parameters(self) -> ParameterSet:
+        extra = [p for e in self.effects for p in e.parameters()]
+        return ParameterSet([*PARAMETERS.values(), *extra]) if extra else PARAMETERS
+
+    def groups(self) -> dict[str, tuple[str, ...]]:
+        return dict(GROUPS)
+
+    def places(self) -> dict[str, Place]:
+        return mechanics.places(self.geometry)
+
+    def options(self) -> dict:
+        opts: dict = {"linearised": self.linearised, "geometry": asdict(self.geometry)}
+        if self.effects:
+            opts["effects"] = [e.spec() for e in self.effects]
+        return opts
+
+    # ---- mechanics ---------------------------------------------------------------------------
+    def mechanism(self, p: Mapping[str, float]) -> Mechanism:
+        """The assembly for full parameter values ``p`` with every effect applied."""
+        mech = mechanics.mechanism(p, self.geometry)
+        for effect, place in self._attached:
+            effect.apply(place, mech, p)
+        return mech
+
+    def layout(self, p: Mapping[str, float]) -> Layout:
+        return self.mechanism(p).layout()
+
+    def generalized_forces(self, q, qd, p: Mapping[str, float], contact=None) -> np.ndarray:
+        """Static and contact forces on the coordinates (numpy, SI, no excitation)."""
+        return statics.forces(self.mechanism(p), q, qd, contact)
+
+    def equilibrium(self, p: Mapping[str, float], mech: Mechanism | None = None) -> np.ndarray:
+        """Static state under gravity, preload and spring load
+        (:func:`sensfw.models.planar.statics.equilibrium`), started where gravity has closed
+        the radial clearances and the preload the shoulder: D rests on L1/L3, C on its slide
+        bearings, K follows D; each contact lightly loaded."""
+        mech = mech or self.mechanism(p)
+        g = self.geometry
+        c1, c3, cs = (p["l1_clearance"] * MM, p["l3_clearance"] * MM,
+                      p["slide_clearance"] * MM)
+        th_d = (c1 - c3) / (g.x_l3 - g.x_l1)
+        y_d = -c1 - th_d * g.x_l1
+        x_d = (p["bearing_preload"] / g.bearing_axial_k) ** (1 / g.bearing_axial_b) * MM
+        guess = np.zeros(mech.layout().n)
+        guess[:8] = [x_d, y_d, th_d, x_d, y_d - cs, th_d, x_d, y_d + th_d * g.x_clutch]
+        return statics.equilibrium(mech, guess, self.name, p)
+
+    def linear_matrices(self, p: Mapping[str, float], q0: np.ndarray | None = None
+                        ) -> tuple[np.ndarray, ...]:
+        """Mass, stiffness and damping matrices at the static state (central differences
+        of the numpy forces; friction enters the damping through ``mu'(0)``)."""
+        p = self.parameters().complete(p)
+        mech = self.mechanism(p)
+        q0 = self.equilibrium(p, mech) if q0 is None else q0
+        contact = statics.linear_contacts(mech, q0) if self.linearised else None
+        return statics.linear_matrices(mech, q0, contact)
+
+    # ---- Exudyn ------------------------------------------------------------------------------
+    def build(self, p: Mapping[str, float], excitation: Chirp | None,
+              q0: np.ndarray | None = None, user_functions: str = "symbolic"
+              ) -> planar_exudyn.Built:
+        """Assemble the Exudyn system at the static equilibrium (not yet solved)."""
+        p = self.parameters().complete(p)
+        mech = self.mechanism(p)
+        q0 = self.equilibrium(p, mech) if q0 is None else q0
+        ops = symbolic_ops() if user_functions == "symbolic" else numpy_ops()
+        contact = statics.linear_contacts(mech, q0) if self.linearised else \
+            Contacts(ops, mech.laws)
+        g = self.geometry
+        loads = []
+        if excitation is not None:
+            loads.append(("C", (g.x_force, 0.0),
+                          lambda ops, t: (0.0, excitation.force_expression(ops, t))))
+        sensors = [("crank_axial", "C", (g.x_sensor, g.r_sensor), 0),
+                   ("crank_radial", "C", (g.x_force, 0.0), 1),
+                   ("drive_axial", "D", (g.x_l3, 0.0), 0),
+                   ("drive_radial", "D", (g.x_l3, 0.0), 1)]
+        return planar_exudyn.build(mech, q0, contact, ops, loads, sensors, user_functions)
+
+    def simulate(self, params: Mapping[str, float], excitation: Chirp,
+                 solver: SolverSettings | None = None,
+                 user_functions: str = "symbolic") -> Signals:
+        import exudyn as exu
+
+        solver = solver or SolverSettings()
+        p = self.parameters().complete(params)
+        exu.config.printToConsole = False
+        t0 = time.perf_counter()
+        mech = self.mechanism(p)
+        q0 = self.equilibrium(p, mech)
+        choice = self.time_step(p, excitation.fs, solver, q0)
+        built = self.build(p, excitation, q0=q0, user_functions=user_functions)
+        n_out = excitation.n_samples
+        try:
+            channels = planar_exudyn.solve(built, excitation.fs, n_out, choice.substeps,
+                                           solver.method)
+        except exu.SolverError as exc:
+            raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
+        if not channels:
+            raise SimulationError(self.name, "Exudyn solver did not finish", p)
+        for name, x in channels.items():
+            if len(x) != n_out or not np.all(np.isfinite(x)):
+                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p,
+                                      step=choice.step)
+            if np.max(np.abs(x)) > 1e7:
+                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p,
+                                      step=choice.step)
+        t = excitation.time()
+        return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
+                       f_inst=excitation.f_inst(t),
+                       units={"force": "N", **{c: "m/s^2" for c in channels}},
+                       meta={"model": self.name, "wall_s": time.perf_counter() - t0,
+                             **choice.to_meta()},
+                       sweep_end=excitation.duration)
+
+    def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings,
+                  q0: np.ndarray | None = None) -> StepChoice:
+        """The RK4 step of a run (:mod:`sensfw.models.stepsize`): at most ``solver.step``,
+        dividing the sample period ``1/fs``, and with ``solver.auto_step`` small enough for
+        the fastest eigenvalues of the model linearised at its static state ``q0`` (the
+        stick band of the slide-bearing friction, over-damped and stiff contacts)."""
+        if not solver.auto_step:
+            return grid_step(solver.step, fs)
+        M, K, D = self.linear_matrices(p, q0)
+        return explicit_step(first_order_eigenvalues(M, K, D), solver.step, fs)
