@@ -163,36 +163,81 @@ def run(
 @_user_errors
 def simulate(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
-    out_file: Annotated[Path, typer.Option("--out", "-o", help="measurement CSV to write")],
+    out_file: Annotated[Path, typer.Option(
+        "--out", "-o", help="measurement file to write: .csv (one per level) or .uff (all "
+                            "levels in one file)")],
     set_: Annotated[list[str] | None, typer.Option("--set", help="NAME=VALUE (paper units)")]
     = None,
     effect: Annotated[list[str] | None, typer.Option(
-        help="NAME[@ATTACH][:PARAM=VALUE,...] hidden physical effect")] = None,
+        help="NAME[@PLACE][:PARAM=VALUE,...] hidden physical effect")] = None,
     noise: Annotated[float, typer.Option(help="noise std as a fraction of each RMS")] = 0.0,
     seed: Annotated[int, typer.Option(help="noise seed")] = 0,
-    amplitude: Annotated[float | None, typer.Option(help="excitation amplitude (N)")] = None,
+    amplitude: Annotated[float | None, typer.Option(help="excitation level (N, or V)")] = None,
+    levels: Annotated[str | None, typer.Option(
+        help="several levels, e.g. 0.1,0.3,1.0 (one file per level, or one UFF)")] = None,
+    excitation: Annotated[str | None, typer.Option(
+        help="log_chirp | linear_sweep | random | stepped_sine (default: the study's)")]
+    = None,
+    offset: Annotated[float, typer.Option(help="DC offset on the force, fraction of the "
+                                               "level")] = 0.0,
+    drift: Annotated[float, typer.Option(help="slow drift of the applied force amplitude, "
+                                              "e.g. 0.2 for +-20 %")] = 0.0,
+    delay: Annotated[float, typer.Option(help="pre-trigger delay (s)")] = 0.0,
+    channel_gain: Annotated[float | None, typer.Option(
+        help="record the amplifier voltage instead of the force: shaker gain in N/V")] = None,
 ) -> None:
-    """Simulate one configuration and write it as a measurement file (synthetic data)."""
-    from .errors import SensfwError
-    from .measure.io import write_csv
-    from .measure.synthetic import synthesize
+    """Simulate one configuration and write it as a rig would record it (synthetic data)."""
+    from .excitation import KINDS
+    from .measure.io import write_csv, write_uff
+    from .measure.synthetic import Rig, synthesize
     from .study import Study
 
     study = Study.load(study_file)
     sets = {}
     for item in set_ or []:
         key, sep, val = item.partition("=")
+        if not sep:
+            raise SensfwError(f"--set {item!r}: expected NAME=VALUE")
         try:
             sets[key.strip()] = float(val)
         except ValueError:
             raise SensfwError(f"--set {item!r}: expected NAME=VALUE with a number") from None
-        if not sep:
-            raise SensfwError(f"--set {item!r}: expected NAME=VALUE")
-    sig, info = synthesize(study, sets, effect or [], noise, seed, amplitude)
+    if excitation is not None and (excitation not in KINDS or excitation == "sampled"):
+        raise SensfwError(f"--excitation {excitation!r}: use one of log_chirp, linear_sweep, "
+                          "random, stepped_sine")
+    if levels and amplitude is not None:
+        raise SensfwError("give --amplitude or --levels, not both")
+    try:
+        values = [float(v) for v in levels.split(",")] if levels else [amplitude]
+    except ValueError:
+        raise SensfwError(f"--levels {levels!r}: expected numbers separated by commas") \
+            from None
+    if any(v is not None and not v > 0 for v in values):
+        raise SensfwError(f"--levels {levels!r}: levels must be positive")
+    records = []
+    for i, level in enumerate(values):
+        rig = Rig(noise=noise, offset=offset, drift=drift, delay=delay, gain=channel_gain,
+                  seed=seed + i)
+        sig, info = synthesize(study, sets, effect or [], amplitude=level,
+                               excitation=excitation, rig=rig)
+        records.append((sig, info))
     out_file.parent.mkdir(parents=True, exist_ok=True)
-    write_csv(out_file, sig, level=info["amplitude"], meta={"source": "sensfw simulate"})
-    out.print(f"wrote {out_file} ({len(sig.t)} samples at {sig.fs:g} Hz, level "
-              f"{info['amplitude']:g} N, noise {noise:g})")
+    meta = {"source": "sensfw simulate", "excitation": excitation or study.excitation.kind,
+            "effects": [e for e in effect or []], "noise": noise, "offset": offset,
+            "drift": drift, "delay": delay}
+    if out_file.suffix.lower() in (".uff", ".unv"):
+        write_uff(out_file, [(sig, info["amplitude"]) for sig, info in records])
+        written = [out_file]
+    else:
+        written = []
+        for sig, info in records:
+            path = out_file if len(records) == 1 else \
+                out_file.with_name(f"{out_file.stem}_{info['amplitude']:g}{out_file.suffix}")
+            written.append(write_csv(path, sig, level=info["amplitude"], meta=meta))
+    paths = written * len(records) if len(written) == 1 else written
+    for (sig, info), path in zip(records, paths, strict=True):
+        out.print(f"wrote {path} ({len(sig.t)} samples at {sig.fs:g} Hz, {info['excitation']}"
+                  f", level {info['amplitude']:g} {info['unit']}, noise {noise:g})")
 
 
 @contextlib.contextmanager
@@ -229,35 +274,29 @@ def compare(
     progress: ShowProgress = True,
 ) -> None:
     """See where the model fails: FRF error per band, resonances, harmonics, THD, levels."""
-    from .measure.compare import amplitude_dependence, compare_level
-    from .measure.session import Variant, load_measurements, simulate
+    from .measure.compare import compare_measurements
+    from .measure.session import load_measurements
     from .report.measure import write_compare_report
     from .study import Study
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
-    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
-        sims = simulate(study, runner, [Variant()], [m.level for m in meas])
-    comparisons, pairs, notes = [], [], []
-    ex = study.excitation
     for m in meas:
-        notes += [f"{m.file}: {n}" for n in m.notes]
-        sig = sims[(Variant(), m.level)]
-        if sig is None:
-            raise SensfwError(f"the model failed at level {m.level:g} N (see {out_dir}/runs)")
-        comparisons.append(compare_level(m.signals, sig, study.output, (ex.f0, ex.f1), m.level,
-                                         m.file))
-        pairs.append((m.level, m.signals, sig))
-    amp = amplitude_dependence(comparisons)
-    _json(out_dir / "compare.json", {"study": study.name, "output": study.output,
-                                     "levels": [c.to_dict() for c in comparisons],
-                                     "amplitude_dependence": amp, "notes": notes})
-    write_compare_report(study, comparisons, pairs, amp, notes, out_dir / "report.html")
-    for c in comparisons:
-        out.print(f"level {c.level:.3g} N: FRF error {c.frf_rms_db:.2f} dB RMS; THD model "
-                  f"{c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %")
-    if amp:
-        for line in amp["summary"]:
+        for note in m.notes:
+            if "not the study's" in note:
+                console.print(f"[yellow]notice:[/] {m.file}: {note}", highlight=False)
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
+        result = compare_measurements(study, meas, runner)
+    _json(out_dir / "compare.json", result.to_dict())
+    write_compare_report(study, result.levels, result.pairs, result.amplitude, result.notes,
+                         out_dir / "report.html")
+    for c in result.levels:
+        thd = "" if c.thd_model is None else \
+            f"; THD model {c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %"
+        out.print(f"level {c.level:.3g} {c.unit}: FRF error {c.frf_rms_db:.2f} dB RMS "
+                  f"(noise floor {c.noise_floor_db:.2f} dB){thd}")
+    if result.amplitude:
+        for line in result.amplitude["summary"]:
             out.print("  " + line)
     out.print(f"-> {out_dir}/compare.json, {out_dir}/report.html")
 

@@ -35,10 +35,10 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .errors import SensfwError, StudyError, UnknownPluginError
-from .excitation import Chirp
+from .excitation import Excitation, make_excitation
 from .models.base import Model, SolverSettings
 from .models.stepsize import CALIBRATED_METHODS
-from .params import DesignSpace, ParameterSet
+from .params import DesignSpace, Parameter, ParameterSet
 
 Quantity = str | float | int
 
@@ -87,13 +87,30 @@ class ModelSection(_Strict):
     output: str | None = None  # FRF/order output channel; default: the model's default_output
 
 
+class GainSection(_Strict):
+    """The shaker's gain (N/V) when measurements record the amplifier voltage."""
+
+    nominal: Quantity
+    min: Quantity
+    max: Quantity
+
+
 class ExcitationSection(_Strict):
+    """The study's excitation; ``kind`` is what a study run uses, ``drive`` how the model is
+    driven for a measurement: ``auto`` (the ideal excitation when the record is it, else the
+    measured record), ``measured`` (always the record) or ``ideal`` (refuse other records)."""
+
+    kind: Literal["log_chirp", "linear_sweep", "stepped_sine", "random"] = "log_chirp"
     f0: Quantity = "50 Hz"
     f1: Quantity = "5 kHz"
     duration: Quantity = "1 s"
     fs: Quantity = "20 kHz"
     amplitude: Quantity = "0.1 N"
     tail: Quantity = "0 s"
+    steps: int = Field(default=20, ge=1)  # stepped_sine
+    seed: int = 0  # random
+    drive: Literal["auto", "measured", "ideal"] = "auto"
+    gain: GainSection | None = None
 
 
 class SolverSection(_Strict):
@@ -222,9 +239,10 @@ class Study:
         self.spec = spec
         self.source = source
         problems: list[tuple[str, str]] = []
+        self.gain: Parameter | None = None
         self.model = self._resolve_model(problems)
-        self.parameters = self._resolve_parameters(problems)
         self.excitation = self._resolve_excitation(problems)
+        self.parameters = self._resolve_parameters(problems)
         self.solver = self._resolve_solver(problems)
         self.groups = self._resolve_groups(problems)
         self.stage_bounds = {}
@@ -289,6 +307,8 @@ class Study:
         if self.model is None:
             return None
         declared = self.model.parameters()
+        if self.gain is not None:
+            declared = ParameterSet([*declared.values(), self.gain])
         changes, ok = self._overrides(self.spec.parameters, declared, "parameters", problems)
         if not ok:
             return None
@@ -334,22 +354,56 @@ class Study:
             changes[name] = vals
         return changes, ok
 
-    def _resolve_excitation(self, problems) -> Chirp | None:
+    def _resolve_excitation(self, problems) -> Excitation | None:
         e = self.spec.excitation
         vals = {}
         for name, unit in (("f0", "Hz"), ("f1", "Hz"), ("duration", "s"), ("fs", "Hz"),
-                           ("amplitude", "N"), ("tail", "s")):
+                           ("tail", "s")):
             try:
                 vals[name] = to_unit(getattr(e, name), unit)
             except ValueError as err:
                 problems.append((f"excitation.{name}", str(err)))
-        if len(vals) < 6:
+        try:  # a force, or an amplifier voltage that drives through the gain
+            vals["amplitude"] = to_unit(e.amplitude, "N")
+        except ValueError:
+            try:
+                vals["amplitude"], vals["signal_unit"] = to_unit(e.amplitude, "V"), "V"
+            except ValueError as err:
+                problems.append(("excitation.amplitude", f"{err} (a force in N or a "
+                                                         "voltage in V)"))
+        if vals.get("signal_unit") == "V" and e.gain is None:
+            problems.append(("excitation.gain", "a voltage excitation needs the shaker's "
+                                                "gain: gain = { nominal, min, max } in N/V"))
+        self.drive = e.drive
+        if e.gain is not None:
+            self._resolve_gain(e.gain, problems)
+        if "amplitude" not in vals or len(vals) < 6:
             return None
+        if e.kind == "stepped_sine":
+            vals["steps"] = e.steps
+        if e.kind == "random":
+            vals["seed"] = e.seed
         try:
-            return Chirp(**vals)
+            return make_excitation({"kind": e.kind, **vals})
         except Exception as err:
             problems.append(("excitation", str(err)))
             return None
+
+    def _resolve_gain(self, gain: GainSection, problems) -> None:
+        """``excitation_gain`` (N/V) joins the parameters: calibrated like any other."""
+        vals = {}
+        for name in ("nominal", "min", "max"):
+            try:
+                vals[name] = to_unit(getattr(gain, name), "N/V")
+            except ValueError as err:
+                problems.append((f"excitation.gain.{name}", str(err)))
+        if len(vals) == 3:
+            try:
+                self.gain = Parameter("excitation_gain", "N/V", vals["nominal"], vals["min"],
+                                      vals["max"], "shaker force per amplifier volt",
+                                      "Excitation")
+            except SensfwError as err:
+                problems.append(("excitation.gain", str(err)))
 
     def _resolve_solver(self, problems) -> SolverSettings | None:
         s = self.spec.solver

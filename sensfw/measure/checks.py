@@ -1,24 +1,42 @@
-"""Checks of a measurement against a study, and alignment with the simulation.
+"""Checks of a measurement against a study, and how the model will be driven for it.
 
-Each check raises :class:`~sensfw.errors.MeasurementError` naming the file and channel:
-missing or misnamed channel (with the closest names), clipping (flat tops at full scale), a
-record shorter than the chirp, and a force that does not look like the study's chirp
-(reported with the estimated f0, f1 and duration). :func:`align` resamples to the study's
-rate and removes the delay between the measured force and the ideal chirp.
+A rig's force is never the study's clean chirp: noise, a DC offset, an amplitude that drifts
+near resonances, a delay, a silent tail, another kind of sweep, random excitation, or an
+amplifier voltage instead of a force. :func:`prepare` therefore
+
+1. refuses what cannot be compared (a missing channel, with the closest names; clipping);
+2. estimates the excitation (:func:`sensfw.signal.sweep.estimate_sweep`: kind, f0, f1,
+   start, end, level, drift, offset);
+3. decides the model's drive: the study's ideal sweep at the measured level when the record
+   is that sweep (within ``SWEEP_TOLERANCE``) and the study asks for it, else the measured
+   record itself (a :class:`~sensfw.excitation.SampledForce`; a voltage drives the model
+   through the study's ``excitation_gain``). A record that is not the study's sweep is a
+   notice with the estimates, not a refusal;
+4. aligns: for the ideal drive, resampled to the study's rate, the delay removed and cut to
+   the study's record; for the measured drive, the DC offset removed (a force transducer's
+   or amplifier's offset is not a static load) and the measured instantaneous frequency
+   attached for order analysis.
+
+Errors raise :class:`~sensfw.errors.MeasurementError` naming the file and channel.
 """
 
 from __future__ import annotations
 
 import difflib
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
-from scipy.signal import correlate, hilbert, resample_poly
+from scipy.signal import correlate, resample_poly
 
 from ..errors import MeasurementError
-from ..excitation import Chirp
+from ..excitation import Excitation, SampledForce
 from ..models.base import Signals
+from ..signal.sweep import SweepEstimate, estimate_sweep
 from .io import Measurement
+
+#: relative tolerance on f0, f1 and duration for "the record is the study's sweep"
+SWEEP_TOLERANCE = 0.03
 
 
 def require_channels(meas: Measurement, channels: list[str]) -> None:
@@ -56,61 +74,32 @@ def check_clipping(meas: Measurement) -> None:
                                               f"level or the sensor range", name)
 
 
-def estimate_sweep(force: np.ndarray, fs: float) -> tuple[float, float, float]:
-    """Estimated (f0, f1, duration) of an exponential sweep in ``force``.
-
-    The phase of the analytic signal gives the instantaneous frequency, whose logarithm is
-    linear in time for a log chirp (Eq. 17). The sweep is where the envelope exceeds half its
-    median over the loud part; a robust (Theil-Sen) line through log f(t) on its inner 96 %
-    gives f0 and f1 at its ends.
-    """
-    from scipy.stats import theilslopes
-
-    z = hilbert(force - np.mean(force))
-    env = np.abs(z)
-    loud = env > 0.1 * np.max(env)
-    if loud.sum() < 20:
-        return float("nan"), float("nan"), 0.0
-    on = np.flatnonzero(env > 0.5 * np.median(env[loud]))
-    i0, i1 = on[0], on[-1]
-    duration = (i1 - i0 + 1) / fs
-    phase = np.unwrap(np.angle(z))
-    finst = np.gradient(phase) * fs / (2 * np.pi)
-    cut = int(0.02 * (i1 - i0))
-    idx = np.arange(i0 + cut, i1 - cut)
-    idx = idx[finst[idx] > 0]
-    if len(idx) < 20:
-        return float("nan"), float("nan"), duration
-    idx = idx[:: max(1, len(idx) // 2000)]
-    slope, intercept, *_ = theilslopes(np.log(finst[idx]), idx / fs)
-    f0 = float(np.exp(intercept + slope * i0 / fs))
-    f1 = float(np.exp(intercept + slope * i1 / fs))
-    return f0, f1, float(duration)
+def sweep_mismatch(est: SweepEstimate, excitation: Excitation,
+                   tolerance: float = SWEEP_TOLERANCE) -> str | None:
+    """Why the estimated excitation is not the study's (``None`` when it is)."""
+    if est.kind != excitation.kind:
+        return f"it is a {est.kind.replace('_', ' ')}, the study's is a " \
+               f"{excitation.kind.replace('_', ' ')}"
+    for name, got, want in (("f0", est.f0, getattr(excitation, "f0", None)),
+                            ("f1", est.f1, getattr(excitation, "f1", None)),
+                            ("duration", est.duration, excitation.duration)):
+        if want is not None and not abs(got / want - 1) <= tolerance:
+            return f"{name} = {got:.4g} differs from the study's {want:.4g} by more than " \
+                   f"{tolerance:.0%}"
+    return None
 
 
-def check_chirp(meas: Measurement, excitation: Chirp, tolerance: float = 0.15) -> None:
-    sig = meas.signals
-    length = len(sig.force) / sig.fs
-    if length < excitation.duration * (1 - 1e-6):
-        raise MeasurementError(meas.file, f"record is {length:.4g} s long, shorter than the "
-                                          f"{excitation.duration:g} s chirp", "force")
-    f0, f1, dur = estimate_sweep(sig.force, sig.fs)
-    ok = (np.isfinite(f0) and np.isfinite(f1)
-          and abs(np.log(f0 / excitation.f0)) < np.log1p(tolerance) * 3
-          and abs(np.log(f1 / excitation.f1)) < np.log1p(tolerance)
-          and abs(dur / excitation.duration - 1) < tolerance)
-    if not ok:
-        raise MeasurementError(meas.file, f"force does not look like the study's chirp "
-                                          f"({excitation.f0:g} -> {excitation.f1:g} Hz in "
-                                          f"{excitation.duration:g} s): estimated f0 = {f0:.4g}"
-                                          f" Hz, f1 = {f1:.4g} Hz, duration = {dur:.4g} s",
-                               "force")
+def describe(est: SweepEstimate) -> str:
+    if est.is_sweep:
+        return (f"{est.kind.replace('_', ' ')} {est.f0:.4g} -> {est.f1:.4g} Hz from "
+                f"{est.t_start:.4g} s to {est.t_end:.4g} s, level {est.amplitude:.4g}, "
+                f"drift +-{est.drift:.0%}, offset {est.offset:.3g}")
+    return (f"{est.kind.replace('_', ' ')} from {est.t_start:.4g} s to {est.t_end:.4g} s, "
+            f"level {est.amplitude:.4g}" + (f" ({'; '.join(est.notes)})" if est.notes else ""))
 
 
 def resample(sig: Signals, fs: float) -> Signals:
     """Polyphase resampling of every channel to ``fs`` (rational approximation)."""
-    from fractions import Fraction
-
     frac = Fraction(fs / sig.fs).limit_denominator(1000)
     up, down = frac.numerator, frac.denominator
     force = resample_poly(sig.force, up, down)
@@ -121,13 +110,14 @@ def resample(sig: Signals, fs: float) -> Signals:
 
 
 def estimate_delay(measured: np.ndarray, reference: np.ndarray, fs: float,
-                   max_delay: float = 0.05) -> float:
+                   max_delay: float = 0.05, around: float = 0.0) -> float:
     """Delay (s) of ``measured`` behind ``reference`` from the peak of their
-    cross-correlation, refined to a fraction of a sample by a parabola through the peak."""
+    cross-correlation within ``around +- max_delay``, refined to a fraction of a sample by a
+    parabola through the peak."""
     n = min(len(measured), len(reference))
     c = correlate(measured[:n], reference[:n], mode="full", method="fft")
     lags = np.arange(-n + 1, n)
-    window = np.abs(lags) <= int(max_delay * fs)
+    window = np.abs(lags - around * fs) <= int(max_delay * fs)
     c = np.where(window, c, -np.inf)
     i = int(np.argmax(c))
     if 0 < i < len(c) - 1 and np.isfinite(c[i - 1]) and np.isfinite(c[i + 1]):
@@ -138,19 +128,20 @@ def estimate_delay(measured: np.ndarray, reference: np.ndarray, fs: float,
     return float((lags[i] + frac) / fs)
 
 
-def align(meas: Measurement, excitation: Chirp) -> Measurement:
-    """Resample to the study's rate, remove the delay against the ideal chirp force and cut
-    to the study's record length (``duration + tail``)."""
+def align_to_ideal(meas: Measurement, excitation: Excitation, est: SweepEstimate
+                   ) -> Signals:
+    """Resample to the excitation's rate, remove the delay against it (near the estimated
+    start, refined by cross-correlation) and cut to its record length."""
     sig = meas.signals
-    notes = list(meas.notes)
     if abs(sig.fs - excitation.fs) > 1e-6 * excitation.fs:
-        notes.append(f"resampled from {sig.fs:g} Hz to {excitation.fs:g} Hz")
+        meas.notes.append(f"resampled from {sig.fs:g} Hz to {excitation.fs:g} Hz")
         sig = resample(sig, excitation.fs)
     ideal = excitation.force()
-    delay = estimate_delay(sig.force, ideal, sig.fs)
+    delay = estimate_delay(sig.force - est.offset, ideal, sig.fs, max_delay=0.002,
+                           around=est.t_start)
     shift = round(delay * sig.fs)
     if shift:
-        notes.append(f"removed a delay of {delay * 1e3:.3f} ms ({shift} samples)")
+        meas.notes.append(f"removed a delay of {delay * 1e3:.3f} ms ({shift} samples)")
     n = excitation.n_samples
 
     def cut(x):
@@ -160,16 +151,68 @@ def align(meas: Measurement, excitation: Chirp) -> Measurement:
         return x[:n]
 
     t = excitation.time()
-    aligned = Signals(t=t, force=cut(sig.force), channels={k: cut(v) for k, v in
-                                                           sig.channels.items()},
-                      fs=excitation.fs, f_inst=excitation.f_inst(t), units=dict(sig.units),
-                      meta={**sig.meta, "delay_s": delay}, sweep_end=excitation.duration)
-    return replace(meas, signals=aligned, notes=notes)
+    return Signals(t=t, force=cut(sig.force - est.offset),
+                   channels={k: cut(v) for k, v in sig.channels.items()}, fs=excitation.fs,
+                   f_inst=excitation.f_inst(t), units=dict(sig.units),
+                   meta={**sig.meta, "delay_s": delay}, sweep_end=excitation.sweep_end)
 
 
-def prepare(meas: Measurement, excitation: Chirp, channels: list[str]) -> Measurement:
-    """All checks, then alignment: what every measurement command does first."""
-    require_channels(meas, channels)
+def measured_drive(meas: Measurement, est: SweepEstimate, level: float) -> SampledForce:
+    """The measured record (offset removed) as the model's excitation; attaches the
+    measured instantaneous frequency to the measurement's signals where it is a sweep."""
+    sig = meas.signals
+    record = sig.force - est.offset
+    sweep = ({"kind": est.kind, "f0": est.f0, "f1": est.f1, "t_start": est.t_start,
+              "t_end": est.t_end} if est.is_sweep else None)
+    drive = SampledForce(record, sig.fs, amplitude=level, signal_unit=meas.input_unit,
+                         sweep=sweep)
+    meas.signals = replace(sig, force=record, f_inst=drive.f_inst(sig.t),
+                           sweep_end=drive.sweep_end if sweep else None)
+    return drive
+
+
+def prepare(meas: Measurement, study) -> Measurement:
+    """Checks, excitation estimate, drive decision and alignment (module docstring): what
+    every measurement command does first."""
+    require_channels(meas, [study.output])
     check_clipping(meas)
-    check_chirp(meas, excitation)
-    return align(meas, excitation)
+    ex = study.excitation
+    sig = meas.signals
+    est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
+    if est.kind == "silent":
+        raise MeasurementError(meas.file, "the excitation channel is silent", "force")
+    meas.sweep = est
+    level = meas.level if meas.level is not None else est.amplitude
+    if meas.level is None:
+        meas.notes.append(f"excitation level estimated from the record: {level:.4g} "
+                          f"{meas.input_unit}")
+    meas.level = float(level)
+    mismatch = sweep_mismatch(est, ex)
+    voltage = meas.input_unit != "N"
+    if voltage and "excitation_gain" not in study.parameters:
+        raise MeasurementError(meas.file, f"the excitation is recorded in {meas.input_unit}: "
+                               "the study needs [excitation] gain (N per "
+                               f"{meas.input_unit}) to drive the model with it", "force")
+    if study.drive == "measured" or voltage or (mismatch and study.drive == "auto"):
+        if mismatch and study.drive == "auto":
+            meas.notes.append(f"the excitation is not the study's ({mismatch}): estimated "
+                              f"{describe(est)}; the model is driven by the measured record")
+        else:
+            meas.notes.append(f"the model is driven by the measured record ({describe(est)})")
+        meas.drive = measured_drive(meas, est, meas.level)
+        return meas
+    if mismatch:  # drive = "ideal" asked for explicitly
+        raise MeasurementError(meas.file, f"the excitation is not the study's ({mismatch}): "
+                               f"estimated {describe(est)}; set [excitation] drive = "
+                               "\"auto\" or \"measured\" to drive the model with the record",
+                               "force")
+    length = len(sig.force) / sig.fs - est.t_start
+    if length < ex.duration * (1 - 1e-3):
+        raise MeasurementError(meas.file, f"record is {length:.4g} s long after the sweep's "
+                                          f"start, shorter than the {ex.duration:g} s sweep",
+                               "force")
+    meas.drive = ex.with_amplitude(float(f"{meas.level:.4g}"))
+    meas.signals = align_to_ideal(meas, ex, est)
+    meas.notes.append(f"the record is the study's sweep ({describe(est)}); the model is "
+                      "driven by the ideal sweep at the measured level")
+    return meas

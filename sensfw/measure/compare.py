@@ -57,6 +57,34 @@ def band_frf_db(sig: Signals, channel: str, bands) -> np.ndarray:
     return np.array(out)
 
 
+def band_noise(sig: Signals, channel: str, bands, half_width: int = 3) -> np.ndarray:
+    """Relative standard error of each band's H1 (:func:`band_frf_db`) from the output
+    noise of the record itself.
+
+    With ``X = H P + N`` the band estimate ``sum conj(P) X / sum |P|^2`` has the relative
+    error ``sqrt(sigma_N^2 / sum_b |H P|^2)``. The per-bin noise variance ``sigma_N^2`` is
+    estimated from the residual of a local fit ``X_k ~ H_k P_k`` (``H_k`` averaged coherently
+    over ``+-half_width`` bins, narrower than a resonance of a few per cent damping at the
+    record's resolution), corrected for the fitted degree of freedom. Bands whose error
+    exceeds ~0.5 (SNR below 6 dB) are noise-limited: the measurement cannot say there how
+    wrong the model is."""
+    P = np.fft.rfft(sig.force)
+    X = np.fft.rfft(sig.channel(channel))
+    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    w = np.ones(2 * half_width + 1)
+    num = np.convolve(np.conj(P) * X, w, mode="same")
+    den = np.convolve(np.abs(P) ** 2, w, mode="same")
+    Hk = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+    resid = np.abs(X - Hk * P) ** 2 * (len(w) / (len(w) - 1))
+    out = []
+    for lo, _, hi in bands:
+        sel = (f >= lo) & (f < hi)
+        signal = np.sum(np.abs(Hk[sel] * P[sel]) ** 2)
+        noise = np.sum(resid[sel]) / max(int(sel.sum()), 1)  # per-bin variance
+        out.append(float(np.sqrt(noise / signal)) if signal > 0 else np.inf)
+    return np.array(out)
+
+
 def resonances(f: np.ndarray, db: np.ndarray, prominence: float = 6.0,
                dynamic_range: float = 30.0) -> list[dict]:
     """Peaks of a (smoothed) FRF magnitude with their half-power damping ratio
@@ -115,9 +143,31 @@ def match_resonances(model: list[dict], measured: list[dict], tol: float = 0.25)
     return sorted(rows, key=lambda r: r["measured_hz"] or r["model_hz"])
 
 
-def harmonics(sig: Signals, channel: str) -> dict[int, float]:
+def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3)
+              ) -> dict[int, float]:
+    """RMS order amplitudes ``P_1`` and ``P_k`` (Eqs. 12-17) of a swept record, each ratio
+    ``P_k / P_1`` over the part of the sweep where order ``k`` stays below 0.45 fs (so H3 is
+    measured even where the whole sweep only allows order 2). Returns ``{1: P_1 (whole
+    sweep), k: P_1(part) * ratio_k}``; empty without a sweep (random excitation)."""
+    if sig.f_inst is None:
+        return {}
     s = sig.sweep()
-    return harmonic_amplitudes(s.channel(channel), s.fs, s.f_inst)
+    x, fr = s.channel(channel), np.asarray(s.f_inst, float)
+    out = harmonic_amplitudes(x, s.fs, fr, harmonics=(1,))
+    for k in orders:
+        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
+        if n < 0.1 * len(fr):
+            continue
+        part = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1, k))
+        if part[1] > 0:
+            out[k] = out[1] * part[k] / part[1]
+    return out
+
+
+def dc_offset(sig: Signals, channel: str) -> float:
+    """Mean of the output over the sweep (an asymmetric contact or a preload can shift it;
+    for an accelerometer mostly the sensor's own offset)."""
+    return float(np.mean(sig.sweep().channel(channel)))
 
 
 @dataclass
@@ -132,18 +182,43 @@ class LevelComparison:
     bands: list[dict]
     resonances: list[dict]
     harmonics: list[dict]
-    thd_model: float
-    thd_measured: float
+    thd_model: float | None
+    thd_measured: float | None
     notes: list[str] = field(default_factory=list)
+    unit: str = "N"  # of the excitation channel (the FRF's denominator)
+    dc_model: float = 0.0
+    dc_measured: float = 0.0
+    peaks_model: list[dict] = field(default_factory=list)
+    peaks_measured: list[dict] = field(default_factory=list)
 
     dynamic_range: float = 35.0
 
+    #: largest standard error (dB) of a used band from the measurement's own noise
+    #: (:func:`band_noise`; 1.5 dB is a relative error of 0.25, an SNR of 12 dB; the
+    #: first-order standard error underestimates the spread beyond that)
+    noise_limit_db: float = 1.5
+
     @property
     def used_bands(self) -> list[dict]:
-        """Bands within ``dynamic_range`` dB of the strongest measured band (weaker ones are
-        noise-limited on a shaker rig)."""
+        """Bands within ``dynamic_range`` dB of the strongest measured band whose own noise
+        error is below ``noise_limit_db`` (weaker ones are noise-limited on a shaker rig)."""
         top = max(b["measured_db"] for b in self.bands)
-        return [b for b in self.bands if b["measured_db"] >= top - self.dynamic_range]
+        return [b for b in self.bands if b["measured_db"] >= top - self.dynamic_range
+                and (b.get("noise_db") is None or b["noise_db"] <= self.noise_limit_db)]
+
+    @property
+    def noise_floor_db(self) -> float:
+        """The FRF error (RMS over the used bands) that the measurement's noise alone
+        exceeds with 0.1 % probability: a correct model stays below it. The band errors of a
+        correct model are independent with the standard errors ``noise_db``, so their mean
+        square is ``chi^2_n / n`` times the mean square standard error."""
+        from scipy.stats import chi2
+
+        v = [b["noise_db"] for b in self.used_bands if b.get("noise_db") is not None]
+        if not v:
+            return 0.0
+        n = len(v)
+        return float(np.sqrt(np.mean(np.square(v)) * chi2.ppf(0.999, n) / n))
 
     @property
     def frf_rms_db(self) -> float:
@@ -155,14 +230,16 @@ class LevelComparison:
         bands = [{**b, "used": b["centre_hz"] in used} for b in self.bands]
         return {"level": self.level, "file": self.file,
                 "frf_error_db": {"rms": self.frf_rms_db, "dynamic_range_db": self.dynamic_range,
+                                 "noise_floor_db": self.noise_floor_db,
                                  "rms_all_bands": float(np.sqrt(np.mean(
                                      [b["mean_db"] ** 2 for b in self.bands]))),
                                  "bands": bands},
                 "resonances": self.resonances, "harmonics": self.harmonics,
                 "thd": {"model": self.thd_model, "measured": self.thd_measured,
                         "difference_db": 20 * np.log10(self.thd_model / self.thd_measured)
-                        if self.thd_model > 0 and self.thd_measured > 0 else None},
-                "notes": self.notes}
+                        if self.thd_model and self.thd_measured else None},
+                "dc_offset": {"model": self.dc_model, "measured": self.dc_measured},
+                "input_unit": self.unit, "notes": self.notes}
 
 
 def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[float, float],
@@ -174,29 +251,39 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
     bands = []
     edges = third_octave_bands(*band)
     bm, bx = band_frf_db(model, channel, edges), band_frf_db(measured, channel, edges)
-    for (lo, c, hi), a, b in zip(edges, bm, bx, strict=True):
+    noise = band_noise(measured, channel, edges)
+    for (lo, c, hi), a, b, e in zip(edges, bm, bx, noise, strict=True):
         sel = (f >= lo) & (f < hi)
         if sel.sum() == 0 or not (np.isfinite(a) and np.isfinite(b)):
             continue
         d = dbm[sel] - dbx[sel]
         bands.append({"centre_hz": c, "lower_hz": lo, "upper_hz": hi,
                       "model_db": float(a), "measured_db": float(b),
-                      "mean_db": float(a - b), "rms_db": float(np.sqrt(np.mean(d**2)))})
-    res = match_resonances(resonances(f, dbm), resonances(f, dbx))
+                      "mean_db": float(a - b), "rms_db": float(np.sqrt(np.mean(d**2))),
+                      # standard error in dB: ln|1 + e z| ~ Re(e z), var e^2 / 2
+                      "noise_db": float(20 / np.log(10) * e / np.sqrt(2))
+                      if np.isfinite(e) else None})
+    pm, px = resonances(f, dbm), resonances(f, dbx)
+    res = match_resonances(pm, px)
     hm, hx = harmonics(model, channel), harmonics(measured, channel)
     rows = []
     for k in sorted(set(hm) & set(hx)):
         rows.append({"order": k, "model": hm[k], "measured": hx[k],
+                     "model_ratio": hm[k] / hm[1] if hm.get(1) else None,
+                     "measured_ratio": hx[k] / hx[1] if hx.get(1) else None,
                      "difference_db": float(20 * np.log10(hm[k] / hx[k]))
                      if hm[k] > 0 and hx[k] > 0 else None})
 
     def thd(h):
-        return 100 * np.sqrt(sum(v**2 for k, v in h.items() if k >= 2)) / h[1] if h.get(1) \
-            else float("nan")
+        return float(100 * np.sqrt(sum(v**2 for k, v in h.items() if k >= 2)) / h[1]) \
+            if h.get(1) and len(h) > 1 else None
 
     return LevelComparison(level=level, file=file, f=f, db_model=dbm, db_measured=dbx,
                            bands=bands, resonances=res, harmonics=rows, thd_model=thd(hm),
-                           thd_measured=thd(hx))
+                           thd_measured=thd(hx), unit=measured.units.get("force", "N"),
+                           dc_model=dc_offset(model, channel),
+                           dc_measured=dc_offset(measured, channel), peaks_model=pm,
+                           peaks_measured=px)
 
 
 def amplitude_dependence(levels: list[LevelComparison]) -> dict | None:
@@ -235,3 +322,43 @@ def amplitude_dependence(levels: list[LevelComparison]) -> dict | None:
         verdict.append("the measurement scales linearly between the levels")
     return {"levels": [lo.level, hi.level], "resonance_shifts": shifts,
             "thd_ratio": thd_ratio, "summary": verdict}
+
+
+@dataclass
+class Comparison:
+    """The model against every measured level (what ``sensfw compare`` writes)."""
+
+    study: str
+    output: str
+    levels: list[LevelComparison]
+    pairs: list[tuple[float, Signals, Signals]]  # (level, measured, model) signals
+    amplitude: dict | None
+    notes: list[str]
+
+    def to_dict(self) -> dict:
+        return {"study": self.study, "output": self.output,
+                "levels": [c.to_dict() for c in self.levels],
+                "amplitude_dependence": self.amplitude, "notes": self.notes}
+
+
+def compare_measurements(study, measurements, runner, variant=None) -> Comparison:
+    """Simulate the study's model (with ``variant``: effects, parameter values) for every
+    prepared measurement (:func:`sensfw.measure.session.load_measurements`) and compare."""
+    from ..errors import SensfwError
+    from .session import Variant, simulate
+
+    variant = variant or Variant()
+    sims = simulate(study, runner, [variant], measurements)
+    ex = study.excitation
+    levels, pairs, notes = [], [], []
+    for i, m in enumerate(measurements):
+        notes += [f"{m.file}: {n}" for n in m.notes]
+        sig = sims[(variant, i)]
+        if sig is None:
+            raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
+                              f"{m.input_unit}); its error is in the run store")
+        levels.append(compare_level(m.signals, sig, study.output, (ex.f0, ex.f1), m.level,
+                                    m.file))
+        pairs.append((m.level, m.signals, sig))
+    return Comparison(study=study.name, output=study.output, levels=levels, pairs=pairs,
+                      amplitude=amplitude_dependence(levels), notes=notes)

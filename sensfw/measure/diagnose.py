@@ -46,7 +46,7 @@ def discrepancy(comparisons) -> np.ndarray:
     parts = []
     for c in comparisons:
         parts.append(np.array([b["mean_db"] for b in c.used_bands]))
-        if c.thd_model > 0 and c.thd_measured > 0:
+        if c.thd_model and c.thd_measured:
             parts.append(np.array([20 * np.log10(c.thd_model / c.thd_measured)])
                          * math.sqrt(THD_WEIGHT))
     return np.concatenate(parts)
@@ -94,13 +94,13 @@ class Evaluator:
         self.n_simulations = 0
 
     def comparisons(self, variants: Sequence[Variant], label: str):
-        sims = simulate(self.study, self.runner, variants, self.levels, label)
+        sims = simulate(self.study, self.runner, variants, self.meas, label)
         self.n_simulations += len(sims)
         out = []
         for v in variants:
             comps = []
-            for m in self.meas:
-                sig = sims[(v, m.level)]
+            for i, m in enumerate(self.meas):
+                sig = sims[(v, i)]
                 if sig is None:
                     comps = None
                     break

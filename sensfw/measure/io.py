@@ -18,6 +18,7 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,17 +32,30 @@ _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
 
 @dataclass
 class Measurement:
-    """Signals read from one file, with where they came from."""
+    """Signals read from one file, with where they came from.
+
+    After :func:`sensfw.measure.checks.prepare`: ``sweep`` is the estimated excitation
+    (:class:`~sensfw.signal.sweep.SweepEstimate`) and ``drive`` the excitation that drives the
+    model for this measurement (the study's ideal sweep at the measured level, or the
+    measured record itself).
+    """
 
     file: str
     signals: Signals
     units: dict[str, str] = field(default_factory=dict)
-    level: float | None = None  # excitation amplitude (N) if known
+    level: float | None = None  # excitation amplitude (N, or V for a voltage) if known
     notes: list[str] = field(default_factory=list)
+    sweep: Any = None
+    drive: Any = None
 
     @property
     def fs(self) -> float:
         return self.signals.fs
+
+    @property
+    def input_unit(self) -> str:
+        """Unit of the excitation channel: N for a force, V for an amplifier voltage."""
+        return self.signals.units.get("force", "N")
 
 
 def _factor(file: str, column: str, unit: str | None, target: str) -> float:
@@ -74,8 +88,20 @@ def _sidecar(path: Path) -> dict:
     return {}
 
 
-def _target(column: str) -> str:
+def _target(column: str, unit: str | None = None) -> str:
+    """SI unit a column is converted to; the excitation may be a force or a voltage."""
+    if column == "force" and unit and _is_voltage(unit):
+        return "V"
     return TARGET_UNITS.get(column, ACCEL_UNIT)
+
+
+def _is_voltage(unit: str) -> bool:
+    from ..study import units
+
+    try:
+        return units().Quantity(1.0, unit.strip()).check("[electric_potential]")
+    except Exception:
+        return False
 
 
 def read_csv(path: str | Path) -> Measurement:
@@ -113,7 +139,8 @@ def read_csv(path: str | Path) -> Measurement:
     unit_map = {**header_units, **side.get("units", {})}
     columns = {}
     for i, name in enumerate(names):
-        columns[name] = data[:, i] * _factor(file, name, unit_map.get(name), _target(name))
+        unit = unit_map.get(name)
+        columns[name] = data[:, i] * _factor(file, name, unit, _target(name, unit))
     return _assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
 
 
@@ -144,12 +171,17 @@ def _assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_decl
                                      f"sidecar declares fs = {fs_declared} Hz", "time")
     channels = {k: v for k, v in columns.items() if k not in ("time", "force")}
     sig = Signals(t=t - t[0], force=columns["force"], channels=channels, fs=fs,
-                  units={k: _target(k) for k in ("force", *channels)})
+                  units={k: _target(k, unit_map.get(k)) for k in ("force", *channels)})
     return Measurement(file=file, signals=sig, units=dict(unit_map),
                        level=None if level is None else float(level))
 
 
-def read_uff(path: str | Path) -> Measurement:
+_LEVEL = re.compile(r"level\s*=\s*([-+0-9.eE]+)")
+
+
+def read_uff_levels(path: str | Path) -> list[Measurement]:
+    """Every measurement in a UFF file: one record (UFF58, time series) per channel, and per
+    level where the records say so (``id2 = "level=0.3"``, as :func:`write_uff` writes)."""
     import pyuff
 
     path = Path(path)
@@ -166,27 +198,73 @@ def read_uff(path: str | Path) -> Measurement:
     records = [s for s in sets if s.get("type") == 58]
     if not records:
         raise MeasurementError(file, "no UFF58 (function at nodal DOF) records")
-    columns, unit_map, t = {}, {}, None
+    groups: dict[float | None, list[dict]] = {}
     for rec in records:
-        name = str(rec.get("id1") or rec.get("rsp_ent_name") or "").strip()
-        if not name:
-            raise MeasurementError(file, "a UFF58 record has no name (id1)")
-        x = np.asarray(rec["x"], float)
-        y = np.asarray(rec["data"], float)
-        if np.iscomplexobj(rec["data"]):
-            raise MeasurementError(file, "complex (spectral) record; expected a time series",
-                                   name)
-        unit = str(rec.get("ordinate_axis_units_lab") or "").strip() or None
-        key = "force" if name.lower() in ("force", "excitation", "input") else name
-        columns[key] = y * _factor(file, key, unit, _target(key))
-        unit_map[key] = unit or _target(key)
-        if t is None:
-            t = x
-        elif len(x) != len(t) or np.max(np.abs(x - t)) > 1e-9 * max(1.0, abs(t[-1])):
-            raise MeasurementError(file, "time axis differs from the first record", key)
-    columns["time"] = t
+        m = _LEVEL.search(str(rec.get("id2") or ""))
+        groups.setdefault(float(m.group(1)) if m else None, []).append(rec)
+    if None in groups and len(groups) > 1:
+        raise MeasurementError(file, "some records carry a level (id2 = 'level=...') and "
+                                     "others do not")
     side = _sidecar(path)
-    return _assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
+    out = []
+    for level, recs in groups.items():
+        where = file if level is None else f"{file} (level {level:g})"
+        columns, unit_map, t = {}, {}, None
+        for rec in recs:
+            name = str(rec.get("id1") or rec.get("rsp_ent_name") or "").strip()
+            if not name:
+                raise MeasurementError(where, "a UFF58 record has no name (id1)")
+            if np.iscomplexobj(rec["data"]):
+                raise MeasurementError(where, "complex (spectral) record; expected a time "
+                                              "series", name)
+            x = np.asarray(rec["x"], float)
+            y = np.asarray(rec["data"], float)
+            unit = str(rec.get("ordinate_axis_units_lab") or "").strip() or None
+            key = "force" if name.lower() in ("force", "excitation", "input") else name
+            if key in columns:
+                raise MeasurementError(where, "two records for the same channel", key)
+            columns[key] = y * _factor(where, key, unit, _target(key, unit))
+            unit_map[key] = unit or _target(key)
+            if t is None:
+                t = x
+            elif len(x) != len(t) or np.max(np.abs(x - t)) > 1e-9 * max(1.0, abs(t[-1])):
+                raise MeasurementError(where, "time axis differs from the first record", key)
+        columns["time"] = t
+        out.append(_assemble(where, columns, unit_map, side.get("fs"),
+                             level if level is not None else side.get("level")))
+    return sorted(out, key=lambda m: (m.level is None, m.level or 0.0))
+
+
+def read_uff(path: str | Path) -> Measurement:
+    """A UFF file holding one measurement (see :func:`read_uff_levels` for several)."""
+    found = read_uff_levels(path)
+    if len(found) > 1:
+        raise MeasurementError(str(path), f"holds {len(found)} levels; load it with "
+                                          "load_all()")
+    return found[0]
+
+
+def write_uff(path: str | Path, measurements: list[tuple[Signals, float | None]]) -> Path:
+    """Write one or several levels as UFF58 time records (one per channel and level, the
+    level in ``id2``)."""
+    import pyuff
+
+    path = Path(path)
+    if path.exists():
+        path.unlink()
+    uff = pyuff.UFF(str(path))
+    for sig, level in measurements:
+        tag = "" if level is None else f"level={level:.10g}"
+        for name, y in [("force", sig.force), *sig.channels.items()]:
+            unit = sig.units.get(name, _target(name))
+            uff.write_sets(pyuff.prepare_58(
+                func_type=1, id1=name, id2=tag, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1,
+                data=np.asarray(y, float), x=sig.t, abscissa_spacing=1, abscissa_min=0.0,
+                abscissa_inc=1 / sig.fs, abscissa_spec_data_type=17,
+                ordinate_spec_data_type=13 if name == "force" else 12,
+                orddenom_spec_data_type=13, ordinate_axis_units_lab=unit, binary=0),
+                mode="add")
+    return path
 
 
 def load(path: str | Path) -> Measurement:
@@ -200,12 +278,20 @@ def load(path: str | Path) -> Measurement:
     raise MeasurementError(str(path), f"unknown file type {ext!r}; use .csv or .uff")
 
 
+def load_all(path: str | Path) -> list[Measurement]:
+    """Every measurement in a file (a UFF file may hold several levels)."""
+    if Path(path).suffix.lower() in (".uff", ".unv"):
+        return read_uff_levels(path)
+    return [load(path)]
+
+
 def write_csv(path: str | Path, signals: Signals, level: float | None = None,
               meta: dict | None = None) -> Path:
     """Write signals as a measurement CSV with units in the header (+ a TOML sidecar with the
     sample rate, level and any ``meta``)."""
     path = Path(path)
-    cols = ["time [s]", "force [N]", *[f"{k} [m/s^2]" for k in signals.channels]]
+    cols = ["time [s]", f"force [{signals.units.get('force', 'N')}]",
+            *[f"{k} [{signals.units.get(k, ACCEL_UNIT)}]" for k in signals.channels]]
     data = np.column_stack([signals.t, signals.force, *signals.channels.values()])
     np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
     side = {"fs": float(signals.fs)}

@@ -9,36 +9,26 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from ..errors import MeasurementError, SensfwError
-from ..models.base import Signals
 from ..runs import Runner, RunSpec
 from ..study import Study
 from .checks import prepare
-from .io import Measurement, load
+from .io import Measurement, load_all
 from .synthetic import model_with_effects
 
 
-def estimate_level(sig: Signals) -> float:
-    """Excitation amplitude (N) from the force: sqrt(2) x its RMS during the sweep."""
-    s = sig.sweep()
-    return float(np.sqrt(2.0) * np.sqrt(np.mean(s.force**2)))
-
-
 def load_measurements(study: Study, files: Sequence[str]) -> list[Measurement]:
-    """Load, check and align every file; each gets its level (sidecar or estimated)."""
+    """Load, check and prepare every file (:func:`~sensfw.measure.checks.prepare`: level,
+    excitation estimate, drive, alignment), sorted by level."""
     if not files:
         raise SensfwError("no measurement file given (--measured FILE ...)")
     out = []
     for f in files:
-        meas = prepare(load(f), study.excitation, [study.output])
-        if meas.level is None:
-            meas.level = estimate_level(meas.signals)
-            meas.notes.append(f"excitation level estimated from the force: {meas.level:.4g} N")
-        if meas.level <= 0:
-            raise MeasurementError(meas.file, "the force is zero", "force")
-        out.append(meas)
+        for raw in load_all(f):
+            meas = prepare(raw, study)
+            if not meas.level > 0:
+                raise MeasurementError(meas.file, "the excitation is zero", "force")
+            out.append(meas)
     return sorted(out, key=lambda m: m.level)
 
 
@@ -64,26 +54,27 @@ class Variant:
         return replace(self, params=tuple(sorted(merged.items())))
 
 
-def spec_for(study: Study, variant: Variant, level: float) -> RunSpec:
+def spec_for(study: Study, variant: Variant, meas: Measurement) -> RunSpec:
+    """The run of the study's model with ``variant`` driven as ``meas`` says."""
     model = model_with_effects(study, variant.effect_specs)
     params = study.parameters.nominal()
     declared = model.parameters()
     for name in declared:
         params.setdefault(name, declared[name].nominal)
     for k, v in variant.params:
-        params[k] = declared[k].check(v)
+        params[k] = (declared[k] if k in declared else study.parameters[k]).check(v)
     ref = study.model_ref()
     if variant.effects:
         ref = {"name": ref["name"], "options": {**ref["options"],
                                                 "effects": variant.effect_specs}}
-    ex = replace(study.excitation, amplitude=float(f"{level:.4g}"))
-    return RunSpec.create(model, params, ex, study.solver, ref)
+    return RunSpec.create(model, params, meas.drive, study.solver, ref)
 
 
 def simulate(study: Study, runner: Runner, variants: Sequence[Variant],
-             levels: Sequence[float], label: str = "model") -> dict:
-    """Signals of every (variant, level); failed runs map to None."""
-    specs = {(v, lv): spec_for(study, v, lv) for v in variants for lv in levels}
+             measurements: Sequence[Measurement], label: str = "model") -> dict:
+    """Signals of every (variant, index of the measurement); failed runs map to None."""
+    specs = {(v, i): spec_for(study, v, m) for v in variants
+             for i, m in enumerate(measurements)}
     runner.run(list(specs.values()), label=label)
     out = {}
     for k, s in specs.items():

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..errors import DivergenceError, SensfwError, SimulationError
-from ..excitation import Chirp
+from ..excitation import Excitation, make_excitation
 from ..models.base import Model, Signals, SolverSettings
 
 
@@ -46,10 +46,13 @@ class RunSpec:
     timeout: float | None = None  # wall seconds; not part of the key
 
     def identity(self) -> dict:
+        excitation = dict(self.excitation)
+        if "samples" in excitation:  # a recorded excitation enters by its content hash
+            excitation = make_excitation(excitation).identity()
         return _canonical({
             "model": self.model, "model_version": self.model_version,
             "model_options": dict(self.model_options), "params": dict(self.params),
-            "excitation": dict(self.excitation), "solver": dict(self.solver),
+            "excitation": excitation, "solver": dict(self.solver),
         })
 
     def key(self) -> str:
@@ -57,7 +60,7 @@ class RunSpec:
         return hashlib.sha256(blob.encode()).hexdigest()[:24]
 
     @classmethod
-    def create(cls, model: Model, params: Mapping[str, float], excitation: Chirp,
+    def create(cls, model: Model, params: Mapping[str, float], excitation: Excitation,
                solver: SolverSettings, model_ref: Mapping[str, Any] | None = None) -> RunSpec:
         """Spec for ``model``; ``model_ref`` (registry name + constructor options) is what a
         worker uses to rebuild the model."""
@@ -89,7 +92,7 @@ def build_model(spec: RunSpec) -> Model:
     return models.get(spec.model)(**options)
 
 
-def simulate_with_halving(model: Model, params: dict, excitation: Chirp,
+def simulate_with_halving(model: Model, params: dict, excitation: Excitation,
                           solver: SolverSettings) -> Signals:
     """``model.simulate``, retried with half the step after a divergence, up to
     ``solver.halvings`` times: an explicit integrator at a fixed step is only stable while
@@ -97,11 +100,18 @@ def simulate_with_halving(model: Model, params: dict, excitation: Chirp,
     linearisation (``auto_step``) rarely gets here, but the dynamics can stiffen beyond the
     static estimate. The retry halves the step that diverged (``err.step`` where the model
     reports it). The step actually used is in ``signals.meta["step"]``; a run that diverges
-    at every step fails with all steps named."""
+    at every step fails with all steps named.
+
+    A voltage record drives the model through the parameter ``excitation_gain`` (N/V,
+    :func:`sensfw.models.drive.apply_gain`); the signals then carry the voltage as their
+    input (``units["force"] == "V"``), as the measurement does."""
+    from ..models.drive import apply_gain
+
+    driving, params = apply_gain(excitation, params)
     step, tried = solver.step, []
     while True:
         try:
-            signals = model.simulate(params, excitation, replace(solver, step=step))
+            signals = model.simulate(params, driving, replace(solver, step=step))
         except DivergenceError as err:
             used = err.step or step
             tried.append(used)
@@ -111,6 +121,10 @@ def simulate_with_halving(model: Model, params: dict, excitation: Chirp,
                                       err.parameters, step=used) from None
             step = used / 2
         else:
+            if driving is not excitation:  # the record is the input, as measured
+                signals.force = excitation.force(signals.t)
+                signals.units["force"] = excitation.unit
+                signals.meta["excitation_gain"] = driving.gain
             signals.meta.setdefault("step", step)
             signals.meta["step_halvings"] = len(tried)
             if tried:  # the step that diverged last is twice the step used
@@ -124,7 +138,7 @@ def execute(spec: RunSpec) -> RunResult:
     key = spec.key()
     try:
         model = build_model(spec)
-        exc = Chirp(**spec.excitation)
+        exc = make_excitation(spec.excitation)
         solver = SolverSettings(**{k: v for k, v in spec.solver.items()
                                    if k in SolverSettings.__dataclass_fields__})
         signals = simulate_with_halving(model, dict(spec.params), exc, solver)

@@ -138,9 +138,11 @@ def coherence(x_in, x_out, fs: float, nperseg: int | None = 1024, **kw):
 def octave_smooth(f, H, fraction: int = 24) -> np.ndarray:
     """Magnitude of ``H`` smoothed over 1/``fraction``-octave windows (energy average
     ``sqrt(mean |H|^2)`` over ``[f 2^(-1/2n), f 2^(1/2n)]``), for plots of swept-sine FRFs
-    whose fine ripple hides the resonances."""
+    whose fine ripple hides the resonances. The 0 Hz bin (no octave around it, and often an
+    FRF of 0/0 for a force without DC) is left out of every window."""
     f = np.asarray(f, float)
     p = np.abs(np.asarray(H)) ** 2
+    p = np.where((f > 0) & np.isfinite(p), p, 0.0)
     c = np.concatenate([[0.0], np.cumsum(p)])
     half = 2 ** (0.5 / fraction)
     lo = np.searchsorted(f, f / half, side="left")

@@ -5,10 +5,11 @@ import pytest
 
 from sensfw.errors import MeasurementError
 from sensfw.excitation import Chirp
-from sensfw.measure.checks import align, estimate_sweep, prepare
-from sensfw.measure.io import load, write_csv
+from sensfw.measure.checks import align_to_ideal, prepare, require_channels
+from sensfw.measure.io import Measurement, load, write_csv
 from sensfw.models.analytic import TwoDOF
 from sensfw.models.base import Signals
+from sensfw.signal.sweep import estimate_sweep
 
 EX = Chirp(50, 2000, 0.3, 20000, 1.0, tail=0.05)
 
@@ -63,16 +64,27 @@ def test_declared_rate_disagrees(tmp_path, good):
         load(f)
 
 
+def two_dof_study(drive="auto", output="a1"):
+    """A study of the analytic 2-DOF model with the excitation ``EX``."""
+    from sensfw.study import Study
+
+    return Study.from_dict({
+        "study": {"name": "t"}, "model": {"name": "two_dof", "output": output},
+        "excitation": {"f0": "50 Hz", "f1": "2 kHz", "duration": "0.3 s", "fs": "20 kHz",
+                       "amplitude": "1 N", "tail": "0.05 s", "drive": drive},
+        "stages": [{"name": "s", "design": "oat", "scorers": [{"name": "rms"}]}]})
+
+
 def test_missing_or_misnamed_channel(tmp_path, good):
     f = csv(tmp_path, good)
     with pytest.raises(MeasurementError, match=r"m\.csv, channel 'a2': missing channel"):
-        prepare(load(f), EX, ["a2"])
+        prepare(load(f), two_dof_study(output="a2"))
     ren = Signals(t=good.t, force=good.force, channels={"crank_axal": good.channels["a1"]},
                   fs=good.fs)
     g = csv(tmp_path, ren, "r.csv")
     with pytest.raises(MeasurementError, match=r"channel 'crank_axial'.*did you mean "
                                                r"'crank_axal'"):
-        prepare(load(g), EX, ["crank_axial"])
+        require_channels(load(g), ["crank_axial"])
 
 
 def test_clipping(tmp_path, good):
@@ -80,49 +92,65 @@ def test_clipping(tmp_path, good):
                 0.5 * np.max(np.abs(good.channels["a1"])))
     f = csv(tmp_path, Signals(t=good.t, force=good.force, channels={"a1": x}, fs=good.fs))
     with pytest.raises(MeasurementError, match=r"m\.csv, channel 'a1': clipped"):
-        prepare(load(f), EX, ["a1"])
+        prepare(load(f), two_dof_study())
 
 
 def test_record_shorter_than_the_chirp(tmp_path, good):
-    n = 4000  # 0.2 s of a 0.3 s chirp
+    n = 4000  # 0.2 s of a 0.3 s chirp: not the study's sweep
     short = Signals(t=good.t[:n], force=good.force[:n], channels={"a1": good.channels["a1"][:n]},
                     fs=good.fs)
     f = csv(tmp_path, short)
-    with pytest.raises(MeasurementError, match=r"channel 'force': record is 0\.2 s long, "
-                                               r"shorter than the 0\.3 s chirp"):
-        prepare(load(f), EX, ["a1"])
+    # the model can be driven by the measured force: a notice, not a refusal
+    m = prepare(load(f), two_dof_study())
+    assert m.drive.kind == "sampled" and len(m.drive.samples) == n
+    # the truncated sweep ends at 50 (2000/50)^(0.2/0.3) = 584 Hz
+    assert m.sweep.f1 == pytest.approx(50 * 40 ** (2 / 3), rel=0.02)
+    assert m.sweep.duration == pytest.approx(0.2, rel=0.02)
+    assert any("f1 = 58" in note and "driven by the measured record" in note
+               for note in m.notes), m.notes
+    # unless the study insists on its ideal sweep
+    with pytest.raises(MeasurementError, match=r"channel 'force': the excitation is not the "
+                                               r"study's \(f1 = 58\d"):
+        prepare(load(f), two_dof_study(drive="ideal"))
 
 
 def test_force_that_is_not_the_studys_chirp(tmp_path, good):
     other = Chirp(100, 1000, 0.3, 20000, 1.0, tail=0.05)
     sig = Signals(t=good.t, force=other.force(), channels=good.channels, fs=good.fs)
     f = csv(tmp_path, sig)
-    with pytest.raises(MeasurementError, match=r"channel 'force': force does not look like the "
-                                               r"study's chirp .* estimated f0 = 1\d\d(\.\d+)? Hz"
-                                               r", f1 = (9\d\d|10\d\d)(\.\d+)? Hz"):
-        prepare(load(f), EX, ["a1"])
+    m = prepare(load(f), two_dof_study())
+    assert m.drive.kind == "sampled"
+    assert m.sweep.f0 == pytest.approx(100, rel=0.02) and m.sweep.f1 == pytest.approx(
+        1000, rel=0.02)
+    assert any("f0 = 100" in note for note in m.notes), m.notes
+    with pytest.raises(MeasurementError, match=r"channel 'force': the excitation is not the "
+                                               r"study's \(f0 = 100\.?\d* differs"):
+        prepare(load(f), two_dof_study(drive="ideal"))
 
 
 def test_sweep_estimate_and_alignment(good):
-    f0, f1, dur = estimate_sweep(good.force, good.fs)
-    assert f0 == pytest.approx(50, rel=0.05) and f1 == pytest.approx(2000, rel=0.05)
-    assert dur == pytest.approx(0.3, rel=0.02)
-    from sensfw.measure.io import Measurement
-
+    est = estimate_sweep(good.force, good.fs)
+    assert est.kind == "log_chirp"
+    # an exact sweep: the phase fit recovers its law far better than the 2 % bar
+    assert est.f0 == pytest.approx(50, rel=2e-3) and est.f1 == pytest.approx(2000, rel=2e-3)
+    assert est.duration == pytest.approx(0.3, rel=2e-3)
     d = 23  # samples of delay
     late = Signals(t=good.t, force=np.concatenate([np.zeros(d), good.force[:-d]]),
                    channels={"a1": np.concatenate([np.zeros(d), good.channels["a1"][:-d]])},
                    fs=good.fs)
-    out = align(Measurement("x.csv", late), EX)
-    assert out.signals.meta["delay_s"] == pytest.approx(d / good.fs, abs=0.2 / good.fs)
-    np.testing.assert_allclose(out.signals.force[: len(good.force) - d],
+    est = estimate_sweep(late.force, late.fs)
+    assert est.t_start == pytest.approx(d / good.fs, abs=0.2 / good.fs)
+    out = align_to_ideal(Measurement("x.csv", late), EX, est)
+    assert out.meta["delay_s"] == pytest.approx(d / good.fs, abs=0.2 / good.fs)
+    np.testing.assert_allclose(out.force[: len(good.force) - d],
                                good.force[: len(good.force) - d], atol=1e-9)
     # a different rate is resampled to the study's
     half = Signals(t=good.t[::2], force=good.force[::2],
                    channels={"a1": good.channels["a1"][::2]}, fs=good.fs / 2)
-    res = align(Measurement("y.csv", half), Chirp(50, 2000, 0.3, 20000, 1.0, tail=0.05))
-    assert res.signals.fs == 20000 and len(res.signals.force) == EX.n_samples
-    assert any("resampled" in n for n in res.notes)
+    meas = Measurement("y.csv", half)
+    res = align_to_ideal(meas, EX, estimate_sweep(half.force, half.fs))
+    assert res.fs == 20000 and len(res.force) == EX.n_samples
+    assert any("resampled" in n for n in meas.notes)
 
 
 def test_uff58_roundtrip(tmp_path, good):

@@ -25,10 +25,11 @@ from dataclasses import asdict
 import numpy as np
 
 from ...errors import DivergenceError, SimulationError
-from ...excitation import Chirp
+from ...excitation import Excitation
 from ...params import ParameterSet
 from ..base import Model, Signals, SolverSettings
 from ..contact import numpy_ops, symbolic_ops
+from ..drive import LoadSignal
 from ..places import Place, resolve_places
 from ..planar import Contacts, Layout, Mechanism, statics
 from ..planar import exudyn as planar_exudyn
@@ -125,10 +126,11 @@ class ShaftAssembly(Model):
         return statics.linear_matrices(mech, q0, contact)
 
     # ---- Exudyn ------------------------------------------------------------------------------
-    def build(self, p: Mapping[str, float], excitation: Chirp | None,
-              q0: np.ndarray | None = None, user_functions: str = "symbolic"
-              ) -> planar_exudyn.Built:
-        """Assemble the Exudyn system at the static equilibrium (not yet solved)."""
+    def build(self, p: Mapping[str, float], excitation: Excitation | None,
+              q0: np.ndarray | None = None, user_functions: str = "symbolic",
+              step: float | None = None) -> planar_exudyn.Built:
+        """Assemble the Exudyn system at the static equilibrium (not yet solved); ``step``
+        is the integrator's step (default ``1/fs``), at which a sampled excitation is fed."""
         p = self.parameters().complete(p)
         mech = self.mechanism(p)
         q0 = self.equilibrium(p, mech) if q0 is None else q0
@@ -136,17 +138,20 @@ class ShaftAssembly(Model):
         contact = statics.linear_contacts(mech, q0) if self.linearised else \
             Contacts(ops, mech.laws)
         g = self.geometry
-        loads = []
+        loads, signal = [], None
         if excitation is not None:
-            loads.append(("C", (g.x_force, 0.0),
-                          lambda ops, t: (0.0, excitation.force_expression(ops, t))))
+            signal = LoadSignal(excitation, step or 1.0 / excitation.fs)
+            loads.append(("C", (g.x_force, 0.0), lambda ops, t: (0.0, signal.value(ops, t))))
         sensors = [("crank_axial", "C", (g.x_sensor, g.r_sensor), 0),
                    ("crank_radial", "C", (g.x_force, 0.0), 1),
                    ("drive_axial", "D", (g.x_l3, 0.0), 0),
                    ("drive_radial", "D", (g.x_l3, 0.0), 1)]
-        return planar_exudyn.build(mech, q0, contact, ops, loads, sensors, user_functions)
+        built = planar_exudyn.build(mech, q0, contact, ops, loads, sensors, user_functions)
+        if signal is not None:
+            built.keep += signal.install(built.mbs)
+        return built
 
-    def simulate(self, params: Mapping[str, float], excitation: Chirp,
+    def simulate(self, params: Mapping[str, float], excitation: Excitation,
                  solver: SolverSettings | None = None,
                  user_functions: str = "symbolic") -> Signals:
         import exudyn as exu
@@ -158,7 +163,8 @@ class ShaftAssembly(Model):
         mech = self.mechanism(p)
         q0 = self.equilibrium(p, mech)
         choice = self.time_step(p, excitation.fs, solver, q0)
-        built = self.build(p, excitation, q0=q0, user_functions=user_functions)
+        built = self.build(p, excitation, q0=q0, user_functions=user_functions,
+                           step=choice.step)
         n_out = excitation.n_samples
         try:
             channels = planar_exudyn.solve(built, excitation.fs, n_out, choice.substeps,
@@ -180,7 +186,7 @@ class ShaftAssembly(Model):
                        units={"force": "N", **{c: "m/s^2" for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
                              **choice.to_meta()},
-                       sweep_end=excitation.duration)
+                       sweep_end=excitation.sweep_end)
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings,
                   q0: np.ndarray | None = None) -> StepChoice:

@@ -1,0 +1,110 @@
+"""How an excitation drives an Exudyn model.
+
+An excitation with a closed form (the log chirp, a linear sweep) becomes a symbolic
+expression of time that Exudyn evaluates in C++ at every stage of its integrator. A sampled
+excitation (a measured force or voltage, random noise, a stepped sine) has no closed form:
+its record is interpolated band-limited (polyphase, :func:`scipy.signal.resample_poly`) to
+half the solver's step, and a pre-step function sets named symbolic variables at every step
+so that the load is the quadratic ``F0 + b tau + c tau^2`` (``tau = t - T0``) through the
+values at the step's start, middle and end: exact at every stage time of RK4 (``0, h/2,
+h``), so the only error is the band-limited interpolation's (measured in
+``tests/models/test_drive.py``).
+
+A voltage record drives a model through a gain (N/V), the study parameter
+``excitation_gain`` (:func:`apply_gain`), calibrated like any other parameter.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..excitation import Excitation
+
+#: the parameter that turns a voltage record into a force (N/V)
+GAIN = "excitation_gain"
+_names = itertools.count()
+
+
+def apply_gain(excitation: Excitation, params: Mapping[str, float]
+               ) -> tuple[Excitation, dict[str, float]]:
+    """The excitation a model sees and the model's own parameters: ``excitation_gain``
+    (N/V) scales a voltage record into a force and is removed from the parameters."""
+    params = dict(params)
+    gain = params.pop(GAIN, None)
+    if gain is None:
+        if excitation.unit != "N":
+            raise ParameterError(f"the excitation is a {excitation.unit} record: it needs the "
+                                 f"parameter {GAIN!r} (N per {excitation.unit})")
+        return excitation, params
+    if excitation.unit == "N":
+        raise ParameterError(f"{GAIN!r} is given but the excitation is already a force (N)")
+    return excitation.scaled(gain), params
+
+
+class LoadSignal:
+    """The excitation as a function of time inside an Exudyn model with step ``step``.
+
+    :meth:`value` gives the expression a load user function returns; :meth:`install`
+    attaches the pre-step function that feeds sampled records (nothing for closed forms).
+    """
+
+    def __init__(self, excitation: Excitation, step: float):
+        self.excitation, self.step = excitation, float(step)
+        self.closed_form = excitation.closed_form
+        self._table: np.ndarray | None = None
+        self._vars: tuple | None = None
+
+    def table(self) -> np.ndarray:
+        """The record at twice the step rate (band-limited): values at every half step."""
+        if self._table is None:
+            from scipy.signal import resample_poly
+
+            ex = self.excitation
+            k = max(1, round(2.0 / (ex.fs * self.step)))
+            self._table = np.concatenate([resample_poly(ex.force(), k, 1), [0.0, 0.0, 0.0]])
+        return self._table
+
+    def value(self, ops, t):
+        """The force at time ``t``: the closed form, or the per-step interpolation (a
+        symbolic expression of two named variables; with numpy ops, the table itself)."""
+        if self.closed_form:
+            return self.excitation.force_expression(ops, t)
+        if not hasattr(t, "Evaluate"):  # Python user functions: interpolate directly
+            tab = self.table()
+            return float(np.interp(t, np.arange(len(tab)) * (self.step / 2), tab))
+        import exudyn as exu
+
+        if self._vars is None:
+            n = next(_names)
+            self._vars = tuple(exu.symbolic.Real(f"sensfw_drive_{name}_{n}", 0.0)
+                               for name in ("F0", "b", "c", "T0"))
+        f0, b, c, t0 = self._vars
+        tau = t - t0
+        return f0 + (b + c * tau) * tau
+
+    def install(self, mbs) -> list:
+        """Attach the pre-step function that sets the variables (sampled records only);
+        returns what must stay alive with ``mbs``."""
+        if self.closed_form or self._vars is None:
+            return []
+        tab, h = self.table(), self.step
+        f0, b, c, t0 = self._vars
+        last = (len(tab) - 3) // 2
+
+        def prestep(mbs, t):
+            # Exudyn calls it before each step with the step's END time (checked in
+            # tests/models/test_drive.py): the step covers [t - h, t]
+            n = min(max(round(t / h) - 1, 0), last)
+            y0, ym, y1 = tab[2 * n], tab[2 * n + 1], tab[2 * n + 2]
+            f0.SetValue(y0)
+            b.SetValue((4.0 * ym - 3.0 * y0 - y1) / h)
+            c.SetValue(2.0 * (y1 - 2.0 * ym + y0) / (h * h))
+            t0.SetValue(n * h)
+            return True
+
+        mbs.SetPreStepUserFunction(prestep)
+        return [prestep, self._vars]
