@@ -1,11 +1,14 @@
-"""Measured signals: loading (CSV with units, UFF58) and writing (synthetic measurements).
+"""Measured signals: loading (CSV with units, UFF58, LMS Test.Lab MAT exports) and writing
+(synthetic measurements).
 
 CSV: a header row with ``time``, the excitation ``force`` and one column per sensor channel;
 units either in the header (``force [N]``, ``crank_axial [m/s^2]``, ``[g]`` meaning standard
 gravity) or in a sidecar ``<file>.toml``/``<file>.json`` with ``[units]`` (column -> unit) and
 optionally ``fs`` and ``level`` (excitation amplitude, N). UFF58: one record per channel
 (pyuff); the record's ``id1`` (or response-entity name) names the channel, ``force`` (or a
-record whose response direction/entity says force) is the excitation.
+record whose response direction/entity says force) is the excitation. LMS Test.Lab MAT v5
+exports (a ``.mat`` file or a folder of them): :mod:`sensfw.measure.lms`; their excitation may
+be an amplifier voltage (``Measurement.excitation == "voltage"``).
 
 Loaded values are converted to SI (N, m/s^2, s). Problems raise
 :class:`~sensfw.errors.MeasurementError` naming the file and the channel.
@@ -31,13 +34,21 @@ _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
 
 @dataclass
 class Measurement:
-    """Signals read from one file, with where they came from."""
+    """Signals read from one file (or one folder of files), with where they came from.
+
+    ``signals.force`` holds the excitation. ``excitation`` says what it is: ``"force"`` (N,
+    the default of every loader but LMS) or ``"voltage"`` (V, an amplifier voltage: a model
+    is then driven through a gain parameter, N/V); ``signals.units["force"]`` agrees.
+    ``level`` is the excitation amplitude in that unit (N or V) if known; ``units`` the
+    units as the file labels them.
+    """
 
     file: str
     signals: Signals
     units: dict[str, str] = field(default_factory=dict)
-    level: float | None = None  # excitation amplitude (N) if known
+    level: float | None = None  # excitation amplitude (N, or V for a voltage) if known
     notes: list[str] = field(default_factory=list)
+    excitation: str = "force"  # "force" (N) or "voltage" (V)
 
     @property
     def fs(self) -> float:
@@ -190,14 +201,22 @@ def read_uff(path: str | Path) -> Measurement:
 
 
 def load(path: str | Path) -> Measurement:
-    """A measurement file, by extension: ``.csv``/``.txt`` or ``.uff``/``.unv``."""
+    """A measurement file, by extension: ``.csv``/``.txt``, ``.uff``/``.unv``, or ``.mat``
+    (LMS Test.Lab export), or a folder of LMS ``.mat`` exports (one level: e.g.
+    ``TimeShaker.mat`` with the excitation and ``Time.mat`` with the responses), read by
+    :func:`sensfw.measure.lms.read_lms`."""
     path = Path(path)
     ext = path.suffix.lower()
+    if path.is_dir() or ext == ".mat":
+        from .lms import read_lms
+
+        return read_lms(path)
     if ext in (".uff", ".unv"):
         return read_uff(path)
     if ext in (".csv", ".txt", ".dat"):
         return read_csv(path)
-    raise MeasurementError(str(path), f"unknown file type {ext!r}; use .csv or .uff")
+    raise MeasurementError(str(path), f"unknown file type {ext!r}; use .csv, .uff, .mat (LMS "
+                                      f"Test.Lab) or a folder of LMS .mat exports")
 
 
 def write_csv(path: str | Path, signals: Signals, level: float | None = None,

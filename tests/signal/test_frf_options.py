@@ -54,7 +54,7 @@ def test_averaged_records_recover_the_fir_response(frames):
 
 def test_option_errors():
     x = np.arange(2048.0) % 7
-    with pytest.raises(SignalError, match="nperseg .* or df .*, not both"):
+    with pytest.raises(SignalError, match=r"nperseg .* or df .*, not both"):
         frf(x, x, FS, nperseg=512, df=2.0)
     with pytest.raises(SignalError, match="does not divide fs"):
         frf(x, x, FS, df=3.0)
