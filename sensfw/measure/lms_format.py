@@ -136,7 +136,10 @@ def _exponents(quantity) -> tuple | None:
     exps = dict.fromkeys(DIMENSIONS, 0.0)
     for term in np.atleast_1d(terms).ravel():
         q = _str(_opt(term, "quantity", "")).upper()
-        num, den = float(_opt(term, "num", 0)), float(_opt(term, "den", 1) or 1)
+        try:
+            num, den = float(_opt(term, "num", 0)), float(_opt(term, "den", 1) or 1)
+        except (TypeError, ValueError):
+            return None
         if q in exps:
             exps[q] = num / den
     return tuple(exps[d] for d in DIMENSIONS)
@@ -205,17 +208,33 @@ def read_functions(path: str | Path) -> list[LMSFunction]:
     return out
 
 
+def _num(v, what: str, file: str, sname: str) -> float:
+    try:
+        return float(_plain(v))
+    except (TypeError, ValueError):
+        raise MeasurementError(file, f"struct {sname!r}: {what} = {_plain(v)!r} is not a "
+                                     f"number") from None
+
+
 def _columns(file: str, sname: str, st) -> list[LMSFunction]:
     vals = np.asarray(_field(st, "y_values.values", file, sname))
-    dx = float(_field(st, "x_values.increment", file, sname))
-    x0 = float(_field(st, "x_values.start_value", file, sname))
+    dx = _num(_field(st, "x_values.increment", file, sname), "x_values.increment", file, sname)
+    x0 = _num(_field(st, "x_values.start_value", file, sname), "x_values.start_value", file,
+              sname)
     nv = _opt(st, "x_values.number_of_values")
+    if nv is not None:
+        nv_f = _num(nv, "x_values.number_of_values", file, sname)
+        if not (np.isfinite(nv_f) and nv_f >= 0 and nv_f.is_integer()):
+            raise MeasurementError(file, f"struct {sname!r}: x_values.number_of_values = "
+                                         f"{nv_f!r} is not a count")
+        nv = int(nv_f)
     if vals.ndim == 1:
         vals = vals[:, None]
-    if vals.ndim != 2 or vals.size == 0:
+    if vals.ndim != 2 or vals.size == 0 or vals.dtype.kind not in "iufc":
         raise MeasurementError(file, f"struct {sname!r}: y_values.values has shape "
-                                     f"{vals.shape}; expected (n,) or (n, channels)")
-    if nv is not None and int(nv) != vals.shape[0] and int(nv) == vals.shape[1]:
+                                     f"{vals.shape} and type {vals.dtype}; expected numbers, "
+                                     f"(n,) or (n, channels)")
+    if nv is not None and nv != vals.shape[0] and nv == vals.shape[1]:
         vals = vals.T
     n, k = vals.shape
     fr = _field(st, "function_record", file, sname)
@@ -223,18 +242,23 @@ def _columns(file: str, sname: str, st) -> list[LMSFunction]:
     fnames = [_str(x) for x in _per_column(_opt(fr, "name", ""), k)]
     ids = _per_column(_opt(fr, "primary_channel.id"), k)
     kind = _str(_opt(fr, "type", "")) or "Signal"
-    if nv is not None and int(nv) != n:
-        raise MeasurementError(file, f"struct {sname!r}: x_values.number_of_values = {int(nv)} "
+    if nv is not None and nv != n:
+        raise MeasurementError(file, f"struct {sname!r}: x_values.number_of_values = {nv} "
                                      f"but y_values.values has {n} rows: lengths differ",
                                labels[0] or None)
-    if not (np.isfinite(dx) and dx > 0):
+    if not (np.isfinite(dx) and dx > 0 and np.isfinite(1.0 / dx)):
         raise MeasurementError(file, f"x_values.increment = {dx!r} is not a positive number",
+                               labels[0] or sname)
+    if not np.isfinite(x0):
+        raise MeasurementError(file, f"x_values.start_value = {x0!r} is not finite",
                                labels[0] or sname)
     yq = _field(st, "y_values.quantity", file, sname)
     xq = _opt(st, "x_values.quantity")
     x_unit = si_unit(_exponents(xq), _str(_opt(xq, "label", "")))
-    factor = float(_opt(yq, "unit_transformation.factor", 1.0))
-    offset = float(_opt(yq, "unit_transformation.offset", 0.0))
+    factor = _num(_opt(yq, "unit_transformation.factor", 1.0), "unit_transformation.factor",
+                  file, sname)
+    offset = _num(_opt(yq, "unit_transformation.offset", 0.0), "unit_transformation.offset",
+                  file, sname)
     label_unit = _str(_opt(yq, "label", ""))
     mks = "MKS" in _str(_opt(yq, "info", "")).upper()
     unit = si_unit(_exponents(yq), label_unit)
@@ -261,8 +285,15 @@ def _columns(file: str, sname: str, st) -> list[LMSFunction]:
             name=label, label=label, kind=kind, values=np.asarray(vals[:, j]), x0=x0, dx=dx,
             x_unit=x_unit, unit=unit, file_unit=label_unit, factor=factor, offset=offset,
             file=file, struct=sname, column=j,
-            channel_id=None if cid is None or _str(cid) == "" else int(cid), record=record))
+            channel_id=_int_or_none(cid), record=record))
     return out
+
+
+def _int_or_none(v) -> int | None:
+    try:
+        return int(_plain(v))
+    except (TypeError, ValueError):
+        return None
 
 
 def _plain(v):

@@ -1,8 +1,12 @@
 """LMS Test.Lab MAT v5 exports (issue 14, item 1): the UNESP-BERT records where present
 (``bert`` fixture, skipped without them) and synthetic files in the same struct layout."""
 
+import copy
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.io import loadmat, savemat
 
 from sensfw.errors import MeasurementError
@@ -206,6 +210,34 @@ def test_lengths_that_differ(tmp_path):
     with pytest.raises(MeasurementError, match=r"number_of_values = 2049 but y_values.values "
                                                r"has 2048 rows"):
         load(tmp_path / "nv.mat")
+
+
+FIELDS = [("x_values", "increment"), ("x_values", "start_value"),
+          ("x_values", "number_of_values"), ("y_values", "values"), ("y_values", "quantity"),
+          ("function_record", "primary_channel"), ("function_record", "name"),
+          ("function_record", "type")]
+VALUES = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-5, 5000),
+                   st.text(max_size=5), st.just(np.zeros((0,))), st.just(np.zeros((2, 3, 2))),
+                   st.lists(st.floats(-1e3, 1e3), max_size=6).map(np.array),
+                   st.just({"label": "N"}), st.just({"id": "x", "label": 3}))
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(where=st.sampled_from(FIELDS), value=VALUES)
+def test_a_damaged_struct_loads_or_is_a_clean_error(tmp_path, where, value):
+    # like the CSV/UFF properties in tests/test_properties.py: never another exception
+    good = lms_struct(sweep(), 1 / FS, ["Shaker:-X"], "V", ids=[8])
+    bad = copy.deepcopy(good)
+    bad[where[0]][where[1]] = value
+    f = tmp_path / "x.mat"
+    savemat(f, {"Time_Shaker__X": bad})
+    try:
+        m = load(f)
+    except MeasurementError as err:
+        assert "x.mat" in str(err)
+    else:
+        assert m.excitation in ("force", "voltage") and np.all(np.isfinite(m.signals.force))
 
 
 def test_other_loaders_keep_a_force_excitation(tmp_path):
