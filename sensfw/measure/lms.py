@@ -167,13 +167,13 @@ def read_lms(path: str | Path | Sequence[str | Path], *, excitation: str | None 
     if lv is None:
         named = [level_from_name(p) for p in paths]
         lv, origin = (named[0], "folder name") if named[0] is not None else (amp, "amplitude")
-    if origin != "amplitude" and amp > 0 and abs(amp / lv - 1) > 0.05:
+    if origin != "amplitude" and amp > 0 and lv > 0 and abs(amp / lv - 1) > 0.05:
         notes.append(f"level {lv:g} {exc.unit} ({origin}) but the {kind} sweep amplitude is "
                      f"{amp:.4g} {exc.unit}")
     avg = exc.record.get("averages")
     if avg not in (None, 0, 1):
-        notes.append(f"LMS records {avg} linear averages for the time data (an ensemble "
-                     f"average of repeated frames?)")
+        notes.append(f"LMS records {avg} averages for these time data: the record may be a "
+                     f"time-domain average of repeated frames (lower noise than one frame)")
     meta = {"source": "LMS Test.Lab", "level_from": origin, "excitation_amplitude": amp,
             "t0": exc.x0, "lms": {f.name: _meta(f) for f in [exc, *resp]}}
     sig = Signals(t=np.arange(n) / fs, force=np.asarray(exc.values, float),
