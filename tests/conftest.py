@@ -1,5 +1,6 @@
 """Shared fixtures: the quick study is run once per test session and reused."""
 
+import os
 import subprocess
 import sys
 import time
@@ -9,6 +10,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "studies" / "quick.toml"
+# real measurements (never copied into the repository): $SENSFW_BERT_DATA or ../shared/data/bert
+BERT = Path(os.environ.get("SENSFW_BERT_DATA") or ROOT / ".." / "shared" / "data" / "bert")
 
 
 def run_cli(*args, timeout=300):
@@ -31,3 +34,13 @@ def quick(tmp_path_factory):
 def cli():
     """Run ``python -m sensfw ARGS`` from the repository root."""
     return run_cli
+
+
+@pytest.fixture(scope="session")
+def bert():
+    """The UNESP-BERT swept-sine folder (``T5Nm/chirp_70_110Hz`` with ``level_0p05`` ...
+    ``level_0p30``); the test is skipped when the data are absent."""
+    chirp = BERT / "T5Nm" / "chirp_70_110Hz"
+    if not chirp.is_dir():
+        pytest.skip(f"UNESP-BERT data not found at {BERT} (set SENSFW_BERT_DATA)")
+    return chirp

@@ -1,11 +1,14 @@
-"""Measured signals: loading (CSV with units, UFF58) and writing (synthetic measurements).
+"""Measured signals: loading (CSV with units, UFF58, LMS Test.Lab MAT exports) and writing
+(synthetic measurements).
 
 CSV: a header row with ``time``, the excitation ``force`` and one column per sensor channel;
 units either in the header (``force [N]``, ``crank_axial [m/s^2]``, ``[g]`` meaning standard
 gravity) or in a sidecar ``<file>.toml``/``<file>.json`` with ``[units]`` (column -> unit) and
 optionally ``fs`` and ``level`` (excitation amplitude, N). UFF58: one record per channel
 (pyuff); the record's ``id1`` (or response-entity name) names the channel, ``force`` (or a
-record whose response direction/entity says force) is the excitation.
+record whose response direction/entity says force) is the excitation. LMS Test.Lab MAT v5
+exports (a ``.mat`` file or a folder of them): :mod:`sensfw.measure.lms`; their excitation may
+be an amplifier voltage (``Measurement.excitation == "voltage"``).
 
 Loaded values are converted to SI (N, m/s^2, s). Problems raise
 :class:`~sensfw.errors.MeasurementError` naming the file and the channel.
@@ -32,7 +35,12 @@ _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
 
 @dataclass
 class Measurement:
-    """Signals read from one file, with where they came from.
+    """Signals read from one file (or one folder of files), with where they came from.
+
+    ``signals.force`` holds the excitation; ``signals.units["force"]`` says what it is: N
+    for a force, V for an amplifier voltage (a model is then driven through the gain
+    parameter ``excitation_gain``, N/V); :attr:`excitation` names it. ``level`` is the
+    excitation amplitude in that unit if known; ``units`` the units as the file labels them.
 
     After :func:`sensfw.measure.checks.prepare`: ``sweep`` is the estimated excitation
     (:class:`~sensfw.signal.sweep.SweepEstimate`) and ``drive`` the excitation that drives the
@@ -56,6 +64,12 @@ class Measurement:
     def input_unit(self) -> str:
         """Unit of the excitation channel: N for a force, V for an amplifier voltage."""
         return self.signals.units.get("force", "N")
+
+    @property
+    def excitation(self) -> str:
+        """``"voltage"`` when the excitation channel is an amplifier voltage, else
+        ``"force"``."""
+        return "voltage" if self.input_unit == "V" else "force"
 
 
 def _factor(file: str, column: str, unit: str | None, target: str) -> float:
@@ -268,20 +282,34 @@ def write_uff(path: str | Path, measurements: list[tuple[Signals, float | None]]
 
 
 def load(path: str | Path) -> Measurement:
-    """A measurement file, by extension: ``.csv``/``.txt`` or ``.uff``/``.unv``."""
+    """A measurement file, by extension: ``.csv``/``.txt``, ``.uff``/``.unv``, or ``.mat``
+    (LMS Test.Lab export), or a folder of LMS ``.mat`` exports (one level: e.g.
+    ``TimeShaker.mat`` with the excitation and ``Time.mat`` with the responses), read by
+    :func:`sensfw.measure.lms.read_lms`."""
     path = Path(path)
     ext = path.suffix.lower()
+    if path.is_dir() or ext == ".mat":
+        from .lms import read_lms
+
+        return read_lms(path)
     if ext in (".uff", ".unv"):
         return read_uff(path)
     if ext in (".csv", ".txt", ".dat"):
         return read_csv(path)
-    raise MeasurementError(str(path), f"unknown file type {ext!r}; use .csv or .uff")
+    raise MeasurementError(str(path), f"unknown file type {ext!r}; use .csv, .uff, .mat (LMS "
+                                      f"Test.Lab) or a folder of LMS .mat exports")
 
 
 def load_all(path: str | Path) -> list[Measurement]:
-    """Every measurement in a file (a UFF file may hold several levels)."""
-    if Path(path).suffix.lower() in (".uff", ".unv"):
+    """Every measurement in a file or folder: a UFF file may hold several levels; a folder
+    of level folders (each with LMS ``.mat`` exports) gives one measurement per level."""
+    path = Path(path)
+    if path.suffix.lower() in (".uff", ".unv"):
         return read_uff_levels(path)
+    if path.is_dir() and not any(path.glob("*.mat")):
+        levels = sorted(p for p in path.iterdir() if p.is_dir() and any(p.glob("*.mat")))
+        if levels:
+            return [load(p) for p in levels]
     return [load(path)]
 
 

@@ -31,27 +31,85 @@ from ._checks import as_signal, check_fs, same_length
 ESTIMATORS = ("H1", "H2", "Hv")
 
 
+def _records(x, name: str) -> np.ndarray:
+    """One record (1-D) or several equally long records, one per row (2-D)."""
+    arr = np.asarray(x, dtype=float)
+    if arr.ndim == 2:
+        if arr.shape[0] < 1:
+            raise SignalError(f"{name} has no records (shape {arr.shape})")
+        for i, row in enumerate(arr):
+            as_signal(row, f"{name} record {i}")
+        return arr
+    return as_signal(arr, name)
+
+
+def _segment_length(fs: float, nperseg: int | None, df: float | None) -> int | None:
+    if df is None:
+        return nperseg
+    if nperseg is not None:
+        raise SignalError(f"give nperseg ({nperseg}) or df ({df} Hz), not both")
+    df = float(df)
+    if not (np.isfinite(df) and df > 0):
+        raise SignalError(f"frequency resolution df must be a positive number, got {df}")
+    n = fs / df
+    if abs(n - round(n)) > 1e-6 * n:
+        raise SignalError(f"df = {df:g} Hz does not divide fs = {fs:g} Hz into a whole "
+                          f"number of samples per segment ({n:.6g})")
+    return round(n)
+
+
 def spectra(x_in, x_out, fs: float, nperseg: int | None = None, noverlap: int | None = None,
-            window: str = "hann") -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+            window: str | tuple | np.ndarray = "hann", *, df: float | None = None,
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Averaged auto and cross spectra ``(f, Spp, Sxx, Spx)`` (Welch, one-sided density).
 
-    ``nperseg=None`` uses one segment spanning the whole record with a rectangular window:
-    exact for a linear system driven by a chirp whose response has decayed inside the record
-    (then H1 = H2 = Hv), but without averaging, so noise is not reduced.
+    Parameters
+    ----------
+    x_in, x_out : array_like
+        Input and output: one record each (1-D), or several records of equal length, one per
+        row (2-D, the same number of rows in both). Several records are averaged linearly
+        with equal weight over records and segments, as an analyser averages repeated
+        acquisition frames (LMS Test.Lab "LINAVERAGE" with ``nr_of_averages`` frames).
+    fs : float
+        Sample rate, Hz.
+    nperseg, noverlap, window
+        Welch segmentation with :func:`scipy.signal.csd`/:func:`scipy.signal.welch`
+        semantics: segment length, overlap in samples (``None``: half a segment) and any
+        window :func:`scipy.signal.get_window` accepts (name, ``(name, parameter)`` tuple or
+        array). ``nperseg=None`` (and no ``df``) uses one segment spanning the whole record
+        with a rectangular window (``window`` and ``noverlap`` are then ignored): exact for
+        a linear system driven by a chirp whose response has decayed inside the record
+        (then H1 = H2 = Hv), but without averaging, so noise is not reduced.
+    df : float, optional
+        Frequency resolution, Hz: the segment length ``nperseg = fs / df`` (must be a whole
+        number; give ``df`` or ``nperseg``, not both). The window is then ``window``.
+
+    Notes
+    -----
+    Window amplitude/energy corrections and the one-sided doubling scale ``Spp``, ``Sxx``
+    and ``Spx`` by the same factor, so they cancel in every FRF estimator and in the
+    coherence; only the window's shape and the segmentation change an FRF.
     """
-    p = as_signal(x_in, "x_in (input)")
-    x = as_signal(x_out, "x_out (output)")
-    same_length(p, x, "x_in", "x_out")
+    p = _records(x_in, "x_in (input)")
+    x = _records(x_out, "x_out (output)")
+    if p.shape != x.shape:
+        if p.ndim == x.ndim == 1:
+            same_length(p, x, "x_in", "x_out")
+        raise SignalError(f"x_in has shape {p.shape} but x_out has shape {x.shape}")
     fs = check_fs(fs)
+    n = p.shape[-1]
+    nperseg = _segment_length(fs, nperseg, df)
     if nperseg is None:
-        nperseg, window, noverlap = len(p), "boxcar", 0
+        nperseg, window, noverlap = n, "boxcar", 0
     nperseg = int(nperseg)
-    if not 8 <= nperseg <= len(p):
-        raise SignalError(f"nperseg={nperseg} must be between 8 and the record length {len(p)}")
+    if not 8 <= nperseg <= n:
+        raise SignalError(f"nperseg={nperseg} must be between 8 and the record length {n}")
     kw = dict(fs=fs, window=window, nperseg=nperseg, noverlap=noverlap, detrend=False)
     f, spx = csd(p, x, **kw)
     _, spp = welch(p, **kw)
     _, sxx = welch(x, **kw)
+    if p.ndim == 2:  # equal-weight linear average over records (each has the same segments)
+        spx, spp, sxx = spx.mean(axis=0), spp.mean(axis=0), sxx.mean(axis=0)
     return f, spp, sxx, spx
 
 
@@ -76,15 +134,17 @@ def hv_from_spectra(spp, sxx, spx, eps: float = 1.0) -> np.ndarray:
 
 
 def frf(x_in, x_out, fs: float, estimator: str = "Hv", eps: float = 1.0,
-        nperseg: int | None = None, noverlap: int | None = None, window: str = "hann",
+        nperseg: int | None = None, noverlap: int | None = None,
+        window: str | tuple | np.ndarray = "hann",
         fmin: float | None = None, fmax: float | None = None,
-        return_coherence: bool = False):
+        return_coherence: bool = False, *, df: float | None = None):
     """Frequency response function from ``x_in`` (force) to ``x_out`` (response).
 
     Parameters
     ----------
     x_in, x_out : array_like
-        Input and output samples (same length).
+        Input and output samples (same length); 2-D arrays hold several records, one per
+        row, whose spectra are averaged (see :func:`spectra`).
     fs : float
         Sample rate, Hz.
     estimator : {"H1", "H2", "Hv"}
@@ -92,11 +152,14 @@ def frf(x_in, x_out, fs: float, estimator: str = "Hv", eps: float = 1.0,
     eps : float
         Noise-variance ratio of Eq. 8 (output over input); 1 gives the TLS estimate.
     nperseg, noverlap, window
-        Welch segmentation (see :func:`spectra`; ``nperseg=None`` is one full segment).
+        Welch segmentation (see :func:`spectra`; ``nperseg=None`` is one full segment with
+        a rectangular window).
     fmin, fmax : float, optional
         Keep only frequencies in ``[fmin, fmax]``.
     return_coherence : bool
         Also return the ordinary coherence ``|Spx|^2 / (Spp Sxx)``.
+    df : float, optional
+        Frequency resolution (Hz) instead of ``nperseg``: ``nperseg = fs / df``.
 
     Returns
     -------
@@ -109,7 +172,7 @@ def frf(x_in, x_out, fs: float, estimator: str = "Hv", eps: float = 1.0,
     """
     if estimator not in ESTIMATORS:
         raise SignalError(f"unknown FRF estimator {estimator!r}; use one of {ESTIMATORS}")
-    f, spp, sxx, spx = spectra(x_in, x_out, fs, nperseg, noverlap, window)
+    f, spp, sxx, spx = spectra(x_in, x_out, fs, nperseg, noverlap, window, df=df)
     with np.errstate(divide="ignore", invalid="ignore"):
         if estimator == "H1":
             H = spx / spp
@@ -129,7 +192,10 @@ def frf(x_in, x_out, fs: float, estimator: str = "Hv", eps: float = 1.0,
 
 
 def coherence(x_in, x_out, fs: float, nperseg: int | None = 1024, **kw):
-    """Ordinary coherence ``(f, |Spx|^2 / (Spp Sxx))`` (needs averaging: default 1024)."""
+    """Ordinary coherence ``(f, |Spx|^2 / (Spp Sxx))`` (needs averaging: default 1024-sample
+    segments; a ``df`` keyword, see :func:`spectra`, replaces that default)."""
+    if kw.get("df") is not None:
+        nperseg = None
     f, _, coh = frf(x_in, x_out, fs, estimator="H1", nperseg=nperseg, return_coherence=True,
                     **kw)
     return f, coh
