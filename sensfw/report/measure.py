@@ -55,6 +55,8 @@ def order_spectra(pairs, channel):
     fig, ax = plt.subplots(figsize=(10, 3.6))
     for level, meas, model in pairs:
         for sig, ls, who in ((meas, "-", "measured"), (model, "--", "model")):
+            if sig.f_inst is None:  # not a sweep (random excitation): no orders
+                continue
             s = sig.sweep()
             n, P = order_spectrum(s.channel(channel), s.fs, s.f_inst)
             ax.semilogy(n, P, ls=ls, lw=1, label=f"{who} {level:.3g} N")
@@ -96,9 +98,11 @@ def write_compare_report(study, comparisons, pairs, amplitude, notes, path) -> P
                 "1/24-octave smoothed.")
     page.figure(band_errors(comparisons), "Where the model fails: FRF error per band.")
     for c in comparisons:
-        page.h3(f"Level {c.level:.3g} N ({c.file}): FRF error {c.frf_rms_db:.2f} dB RMS "
-                f"(bands within {c.dynamic_range:g} dB of the strongest), "
-                f"THD model {c.thd_model:.2f} % / measured {c.thd_measured:.2f} %")
+        thd = "no THD (not a sweep)" if c.thd_model is None else \
+            f"THD model {c.thd_model:.2f} % / measured {c.thd_measured:.2f} %"
+        page.h3(f"Level {c.level:.3g} {c.unit} ({c.file}): FRF error {c.frf_rms_db:.2f} dB "
+                f"RMS (bands within {c.dynamic_range:g} dB of the strongest and above the "
+                f"noise; noise floor {c.noise_floor_db:.2f} dB), {thd}")
         page.table(_frame(c.resonances).fillna(""), index=False)
         page.table(_frame(c.harmonics), index=False)
     if amplitude:
