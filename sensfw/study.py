@@ -197,6 +197,15 @@ class StageSpec(_Strict):
         return v
 
 
+class CalibrationSection(_Strict):
+    """The base parameters diagnosis calibrates (design-variable names), optionally with
+    narrower bounds; without it, every variable the screening stage ranks above its
+    threshold."""
+
+    parameters: list[str] | None = None
+    bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
+
+
 class StudyFile(_Strict):
     study: StudyInfo
     model: ModelSection = Field(default_factory=ModelSection)
@@ -206,6 +215,7 @@ class StudyFile(_Strict):
     parameters: dict[str, ParameterOverride] = Field(default_factory=dict)
     groups: dict[str, list[str]] | None = None  # None: the model's default grouping
     stages: list[StageSpec] = Field(min_length=1)
+    calibration: CalibrationSection | None = None
 
 
 def _without(data: Any, locs: list[tuple]) -> Any:
@@ -247,6 +257,7 @@ class Study:
         self.groups = self._resolve_groups(problems)
         self.stage_bounds = {}
         self._check_stages(problems)
+        self.calibration_bounds = self._check_calibration(problems)
         if problems:
             raise StudyError(problems, source)
 
@@ -515,6 +526,26 @@ class Study:
                 changes, _ = self._overrides(st.bounds, self.parameters, f"{where}.bounds",
                                              problems)
                 self.stage_bounds[st.name] = changes
+
+    def _check_calibration(self, problems) -> dict:
+        cal = self.spec.calibration
+        if cal is None or self.parameters is None:
+            return {}
+        known = set(self.variable_names())
+        for i, name in enumerate(cal.parameters or []):
+            if name not in known:
+                problems.append((f"calibration.parameters[{i}]",
+                                 f"unknown design variable {name!r}; known: "
+                                 f"{', '.join(sorted(known))}"))
+        changes, _ = self._overrides(cal.bounds, self.parameters, "calibration.bounds",
+                                     problems)
+        return changes
+
+    def calibration_space(self, variables: list[str]) -> DesignSpace:
+        """The design space diagnosis calibrates: ``variables`` with the study's and the
+        ``[calibration]`` bounds."""
+        return DesignSpace.from_parameters(self.parameters, self.groups, select=variables,
+                                           bounds=self.calibration_bounds)
 
     # ---- use ---------------------------------------------------------------------------------
     @property

@@ -44,8 +44,9 @@ class Effect(ABC):
     preferred_places: ClassVar[tuple[str, ...]] = ()
     signatures: ClassVar[tuple[str, ...]] = ()
     signature_classes: ClassVar[frozenset[str]] = frozenset()
-    #: calibration design: values per parameter (default 5 for one parameter, 3 for two)
-    design_levels: ClassVar[dict[str, int]] = {}
+    #: parameter values at which the effect vanishes exactly (the model without it): a
+    #: calibration that starts there can only end better than the model without the effect
+    neutral: ClassVar[dict[str, float]] = {}
 
     def __init__(self, attach: str | None = None):
         self.attach = attach
@@ -59,10 +60,12 @@ class Effect(ABC):
         """Add the effect's physics at ``place`` through ``hooks`` for parameter values
         ``p`` (the model's and the effect's, paper units)."""
 
-    def seeds(self, comparisons) -> list[dict[str, float]]:
-        """Parameter values suggested by the evidence of a model/measurement comparison
-        (added to the calibration design); none by default."""
-        return []
+    def probes(self, comparisons) -> list[dict[str, float]]:
+        """Points at which diagnosis first tries the effect (from the neutral model): by
+        default every parameter at its nominal value; effects whose response is multimodal
+        in a parameter (a mode's frequency) give several, guided by the evidence of the
+        model/measurement ``comparisons``."""
+        return [{p.name: p.nominal for p in self.parameters()}]
 
     def spec(self) -> dict:
         out = {"name": self.name}

@@ -7,6 +7,7 @@ to, so it works on any model's contact places.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 from ..errors import SensfwError
 from ..models.contact import Friction as FrictionLaw
@@ -67,8 +68,10 @@ class Clearance(Effect):
                   "the motion exceeds the gap")
     signature_classes = frozenset({"hardening", "softening", "even_harmonics"})
 
+    neutral: ClassVar[dict[str, float]] = {"clearance_gap": 0.0}
+
     def parameters(self):
-        return [Parameter("clearance_gap", "mm", 3e-3, 5e-4, 1e-2, "play at the contact",
+        return [Parameter("clearance_gap", "mm", 3e-3, 0.0, 1e-2, "play at the contact",
                           "Effect: clearance")]
 
     def apply(self, place, hooks, p):
@@ -89,8 +92,10 @@ class Friction(Effect):
                   "with level", "resonances soften with level")
     signature_classes = frozenset({"softening"})
 
+    neutral: ClassVar[dict[str, float]] = {"friction_mu": 0.0}
+
     def parameters(self):
-        return [Parameter("friction_mu", "", 0.15, 0.02, 0.4, "static friction coefficient",
+        return [Parameter("friction_mu", "", 0.15, 0.0, 0.4, "static friction coefficient",
                           "Effect: friction"),
                 Parameter("friction_velocity", "mm/s", 0.5, 0.05, 5.0,
                           "friction transition velocity", "Effect: friction")]
@@ -103,10 +108,10 @@ class Friction(Effect):
 
 @effects.register("contact_hardening")
 class ContactHardening(Effect):
-    """A stiffer-growing force exponent at a penalty contact (e.g. Hertz point contact 1.5
-    instead of line contact 10/9 at a roller bearing). The coefficient is rescaled so the
-    force at a penetration of 0.1 um is unchanged: the exponent changes the curvature of the
-    law, not its level."""
+    """A stiffer-growing force law at a penalty contact: its exponent ``b`` rises by
+    ``hardening_increase`` (e.g. Hertz point contact 1.5 instead of line contact 10/9 at a
+    roller bearing: +0.39). The coefficient is rescaled so the force at a penetration of
+    0.1 um is unchanged: the exponent changes the curvature of the law, not its level."""
 
     name = "contact_hardening"
     fits = ("contact",)
@@ -116,15 +121,18 @@ class ContactHardening(Effect):
     signature_classes = frozenset({"hardening"})
     reference_penetration = 1e-7  # m
 
+    neutral: ClassVar[dict[str, float]] = {"hardening_increase": 0.0}
+
     def parameters(self):
-        return [Parameter("hardening_exponent", "", 1.4, 1.12, 2.0,
-                          "force exponent of the contact", "Effect: contact_hardening")]
+        return [Parameter("hardening_increase", "", 0.3, 0.0, 0.9,
+                          "increase of the contact's force exponent",
+                          "Effect: contact_hardening")]
 
     def apply(self, place, hooks, p):
         law = hooks.contact_law(place.name)
         if not all(hasattr(law, a) for a in ("k", "b")):
             raise SensfwError(f"contact_hardening needs a power law k delta^b at "
                               f"{place.name!r}; its law is {type(law).__name__}")
-        b = p["hardening_exponent"]
+        b = law.b + p["hardening_increase"]
         k = law.k * self.reference_penetration ** (law.b - b)
         hooks.set_contact_law(place.name, replace(law, k=k, b=b))

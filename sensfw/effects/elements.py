@@ -24,8 +24,10 @@ class Damping(Effect):
     signatures = ("lower and wider peaks", "no new harmonics", "no frequency shift")
     signature_classes = frozenset({"amplitude_independent"})
 
+    neutral: ClassVar[dict[str, float]] = {"extra_damping": 0.0}
+
     def parameters(self):
-        return [Parameter("extra_damping", "N*s/mm", 0.05, 0.005, 0.5,
+        return [Parameter("extra_damping", "N*s/mm", 0.05, 0.0, 0.5,
                           "viscous damping across the place", "Effect: damping")]
 
     def apply(self, place, hooks, p):
@@ -50,8 +52,10 @@ class Preload(Effect):
                   "changes (mostly falls)", "a static (DC) shift")
     signature_classes = frozenset({"even_harmonics", "amplitude_independent"})
 
+    neutral: ClassVar[dict[str, float]] = {"preload_force": 0.0}
+
     def parameters(self):
-        return [Parameter("preload_force", "N", 5.0, 0.5, 20.0, "axial force on the body",
+        return [Parameter("preload_force", "N", 5.0, 0.0, 20.0, "axial force on the body",
                           "Effect: preload")]
 
     def apply(self, place, hooks, p):
@@ -76,8 +80,10 @@ class AddedMass(Effect):
     signatures = ("the resonances the body takes part in shift down", "no new harmonics")
     signature_classes = frozenset({"amplitude_independent"})
 
+    neutral: ClassVar[dict[str, float]] = {"added_mass": 0.0}
+
     def parameters(self):
-        return [Parameter("added_mass", "kg", 0.02, 0.002, 0.1, "mass at the body's point",
+        return [Parameter("added_mass", "kg", 0.02, 0.0, 0.1, "mass at the body's point",
                           "Effect: added_mass")]
 
     def apply(self, place, hooks, p):
@@ -88,28 +94,32 @@ class AddedMass(Effect):
 class FlexibleMode(Effect):
     """An elastic mode the rigid model lacks (the paper's Fig. 12a): a modal mass at a
     body's point, coupled in both in-plane directions by a spring-damper tuned to the
-    mode's frequency and modal damping ratio."""
+    mode's frequency and modal damping ratio. With no modal mass the mode is absent."""
 
     name = "flexible_mode"
     fits = ("body",)
     preferred_places = ("crankshaft",)
     signatures = ("a new resonance peak", "no new harmonics")
     signature_classes = frozenset({"new_peak", "amplitude_independent"})
-    modal_mass = 0.03  # kg
-    design_levels: ClassVar[dict[str, int]] = {"flex_frequency": 7, "flex_damping": 2}
+    neutral: ClassVar[dict[str, float]] = {"flex_mass": 0.0}
 
     def parameters(self):
         return [Parameter("flex_frequency", "Hz", 2500.0, 600.0, 4500.0, "modal frequency",
                           "Effect: flexible_mode"),
                 Parameter("flex_damping", "", 0.02, 0.003, 0.08, "modal damping ratio",
+                          "Effect: flexible_mode"),
+                Parameter("flex_mass", "kg", 0.03, 0.0, 0.06, "modal mass",
                           "Effect: flexible_mode")]
 
     def apply(self, place, hooks, p):
+        m = p["flex_mass"]
+        if m <= 0:  # neutral: no mode
+            return
         w = 2 * math.pi * p["flex_frequency"]
-        k = self.modal_mass * w * w
-        c = 2 * p["flex_damping"] * self.modal_mass * w
+        k = m * w * w
+        c = 2 * p["flex_damping"] * m * w
         body = f"mode@{place.name}"
-        hooks.add_body(body, self.modal_mass, follows=(place.body1, place.r1))
+        hooks.add_body(body, m, follows=(place.body1, place.r1))
 
         def law(ops, u, v):
             return -k * u[0] - c * v[0], -k * u[1] - c * v[1]
@@ -117,16 +127,20 @@ class FlexibleMode(Effect):
         hooks.add_force(f"flexible_mode@{place.name}", place.body1, place.r1, body,
                         (0.0, 0.0), law)
 
-    def seeds(self, comparisons):
-        """A measured resonance the model does not have is where the missing mode is."""
-        out = []
+    def probes(self, comparisons):
+        """A measured resonance the model does not have is where the missing mode is (the
+        coupled peak sits above the uncoupled frequency); without one, three frequencies
+        spread over the range."""
         lo, hi = 600.0, 4500.0
+        out = []
         for c in comparisons[:1]:
             for r in c.resonances:
                 f = r.get("measured_hz")
                 if r.get("model_hz") is None and f and lo <= f <= hi:
                     zeta = float(np.clip(r.get("measured_damping") or 0.02, 0.003, 0.08))
-                    # the coupled peak sits above the uncoupled modal frequency
                     out += [{"flex_frequency": float(np.clip(f * s, lo, hi)),
-                             "flex_damping": zeta} for s in (0.8, 0.9, 1.0)]
-        return out[:6]
+                             "flex_damping": zeta, "flex_mass": 0.03} for s in (0.85, 1.0)]
+        if not out:
+            out = [{"flex_frequency": f, "flex_damping": 0.02, "flex_mass": 0.03}
+                   for f in (900.0, 1700.0, 3200.0)]
+        return out[:4]

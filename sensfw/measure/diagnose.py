@@ -1,29 +1,34 @@
-"""Find the physical effect the model lacks, and calibrate it.
+"""Which physical effect does the model lack, and where — when its own parameters are off too.
 
-For each candidate effect the model is extended by that effect and its few parameters are
-calibrated against the measurement, surrogate-assisted because simulations are costly: a
-small design over the effect's parameters (5 points for one parameter, 3x3 for two; log
-spacing for ranges over a factor 10), a Gaussian-process surrogate of the discrepancy,
-its minimiser confirmed by simulation (twice, refitting the surrogate with the new point).
-Candidates are ranked by the Bayesian information criterion of the remaining discrepancy,
-``BIC = n ln(RSS/n) + k ln n`` (n discrepancy entries, k added parameters), against the
-model without any effect; the verdict is "none" when no candidate lowers the BIC clearly
-(by more than ``min_delta_bic``) and the error by at least ``min_reduction`` — then nothing
-explains more than noise.
+On a real rig the base parameters are never at their nominal values: a missing effect and
+wrong parameters are confounded (Brynjarsdottir & O'Hagan 2014), and the best fit is not the
+right physics unless every hypothesis gets the same chance to recalibrate. So:
 
-The discrepancy of one level is a vector of dB differences: the FRF in one-third-octave
-bands (H1 averaged coherently over each band, so noise averages down), and the THD ratio
-model/measured in dB (weighted as ``THD_WEIGHT`` bands); over several levels the vectors
-are stacked. Bands more than 35 dB (the dynamic range) below the strongest measured band are
-left out (:attr:`~sensfw.measure.compare.LevelComparison.used_bands`): there the response
-is weak and a shaker measurement is noise-limited (with 2 % noise the low-frequency bands
-of the shipped model's axial FRF read 5-15 dB high).
+1. **H0, "parameters only"**: the study's calibration variables (``[calibration]``, or every
+   variable its screen ranks above the threshold) are calibrated against the measurements
+   (:func:`sensfw.measure.calibrate.calibrate`). If H0 leaves residuals that the
+   measurement's noise explains (chi-square test, :mod:`sensfw.measure.discrepancy`), the
+   verdict is **"parameters"**.
+2. **Candidates**: every effect at every place of the model it fits, pruned by the signature
+   classes of the measured amplitude dependence where several levels are measured
+   (:mod:`sensfw.measure.signatures`), then screened cheaply: from H0's calibrated point each
+   is simulated at its probe values (the neutral values make it vanish exactly), and the
+   chi-square it could reach along the line from H0 to the probe is its screening score.
+3. The best ``refine`` candidates are **calibrated jointly** with the base variables, from
+   the best of H0 and their probes (so no candidate ends worse than H0). An effect
+   parameter that ends on a bound other than its neutral value gets a second start from
+   the other side before it is reported as on its bound.
+4. **Ranking**: BIC (``chi2 + k ln n``) and, with two or more levels, the held-out-level
+   error: each level is left out in turn, the calibration moved to fit the others (one
+   Gauss-Newton step with the Jacobian of the joint fit) and the left-out level predicted
+   by simulation. The verdict is the best effect when it beats H0 by ``min_delta_bic`` and
+   (with several levels) predicts the held-out levels better; otherwise **"none"**.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,358 +38,342 @@ from ..models.places import fitting_places
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
-from .compare import compare_level
+from . import discrepancy
+from .calibrate import Coordinates, Evaluation, Fit, calibrate
+from .evaluate import Evaluator
 from .io import Measurement
-from .session import Variant, simulate
 from .synthetic import model_with_effects
 
-THD_WEIGHT = 3.0
+Log = Callable[[str], None]
 
 
-def discrepancy(comparisons) -> np.ndarray:
-    """Stacked dB differences of several :class:`~sensfw.measure.compare.LevelComparison`."""
-    parts = []
-    for c in comparisons:
-        parts.append(np.array([b["mean_db"] for b in c.used_bands]))
-        if c.thd_model and c.thd_measured:
-            parts.append(np.array([20 * np.log10(c.thd_model / c.thd_measured)])
-                         * math.sqrt(THD_WEIGHT))
-    return np.concatenate(parts)
+def calibration_variables(study: Study, runner: Runner, log: Log = lambda s: None
+                          ) -> tuple[list[str], str]:
+    """The base variables to calibrate and where they come from: ``[calibration]
+    parameters``, else every variable the first stage's screen ranks above its threshold
+    (the screen runs through the run store, so it is reused when it exists)."""
+    cal = study.spec.calibration
+    if cal is not None and cal.parameters:
+        return list(cal.parameters), "[calibration] parameters"
+    stage = study.stages[0]
+    if stage.select is None:
+        raise SensfwError("diagnosis needs the base parameters to calibrate: add "
+                          "[calibration] parameters = [...] to the study, or a screening "
+                          "first stage with a [select]")
+    from ..pipeline import run_stage
 
-
-def rms(v: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.square(v))))
-
-
-def bic(v: np.ndarray, k: int) -> float:
-    n = len(v)
-    return float(n * np.log(max(np.mean(np.square(v)), 1e-300)) + k * np.log(n))
+    log(f"screen {stage.name!r} for the calibration variables")
+    res = run_stage(study, stage, runner, {})
+    imp = res.screening.importance
+    names = [n for n in imp.sort_values(ascending=False).index
+             if imp[n] >= stage.select.threshold]
+    return names, f"screen {stage.name!r} above {stage.select.threshold:.0%}"
 
 
 @dataclass
-class Evaluation:
-    values: dict[str, float]
-    vector: np.ndarray | None  # None: the simulation failed
+class Hypothesis:
+    """H0 (``effect is None``) or an effect at a place, with its calibration."""
+
+    effect: object | None
+    place: str
+    coords: Coordinates
+    fit: Fit | None = None
+    screen_chi2: float = math.inf
+    heldout: float | None = None
+    notes: list[str] = field(default_factory=list)
+    screen_best: Evaluation | None = None
 
     @property
-    def error(self) -> float:
-        return rms(self.vector) if self.vector is not None else math.inf
+    def name(self) -> str:
+        return "parameters" if self.effect is None else f"{self.effect.name}@{self.place}"
 
+    @property
+    def spec(self) -> dict | None:
+        return None if self.effect is None else self.effect.spec()
 
-@dataclass
-class Candidate:
-    effect: str
-    attach: str
-    params: list[str]
-    evaluations: list[Evaluation] = field(default_factory=list)
+    @property
+    def k(self) -> int:
+        return len(self.coords)
 
-    def best(self) -> Evaluation:
-        return min(self.evaluations, key=lambda e: e.error)
-
-
-class Evaluator:
-    """Discrepancy of model variants against the measurements (through the run store)."""
-
-    def __init__(self, study: Study, measurements: Sequence[Measurement], runner: Runner,
-                 band: tuple[float, float] | None = None):
-        self.study, self.meas, self.runner = study, list(measurements), runner
-        ex = study.excitation
-        self.band = band or (ex.f0, ex.f1)
-        self.levels = [m.level for m in self.meas]
-        self.n_simulations = 0
-
-    def comparisons(self, variants: Sequence[Variant], label: str):
-        sims = simulate(self.study, self.runner, variants, self.meas, label)
-        self.n_simulations += len(sims)
-        out = []
-        for v in variants:
-            comps = []
-            for i, m in enumerate(self.meas):
-                sig = sims[(v, i)]
-                if sig is None:
-                    comps = None
-                    break
-                comps.append(compare_level(m.signals, sig, self.study.output, self.band,
-                                           m.level, m.file))
-            out.append(comps)
+    def row(self, n: int, h0: Hypothesis | None, evaluator: Evaluator) -> dict:
+        fit = self.fit
+        chi2 = fit.chi2
+        out = {"hypothesis": self.name,
+               "effect": None if self.effect is None else self.effect.name,
+               "place": self.place or None, "k": self.k, "chi2": chi2,
+               "chi2_per_entry": chi2 / n, "bic": chi2 + self.k * math.log(n),
+               "fits_noise": discrepancy.fits(fit.best.w, self.k),
+               "heldout_chi2_per_entry": self.heldout,
+               "params": fit.values, "calibration": fit.summary(),
+               "n_evaluations": len(fit.evaluations), "notes": self.notes}
+        if h0 is not None and h0.fit is not None:
+            out["delta_bic"] = (h0.fit.chi2 + h0.k * math.log(n)) - out["bic"]
         return out
 
-    def evaluate(self, variants: Sequence[Variant], label: str) -> list[np.ndarray | None]:
-        return [None if c is None else discrepancy(c) for c in self.comparisons(variants,
-                                                                                label)]
 
-
-class Coding:
-    """Map effect parameters to [-1, 1] (logarithmically for ranges of a factor 10 or more)."""
-
-    def __init__(self, params):
-        self.names = [p.name for p in params]
-        self.lo = np.array([p.min for p in params], float)
-        self.hi = np.array([p.max for p in params], float)
-        self.log = (self.lo > 0) & (self.hi >= 10 * self.lo)
-
-    def _t(self, x):
-        return np.where(self.log, np.log10(np.where(self.log, x, 1.0)), x)
-
-    def code(self, values) -> np.ndarray:
-        x = np.array([values[n] for n in self.names] if isinstance(values, dict) else values,
-                     float)
-        a, b = self._t(self.lo), self._t(self.hi)
-        return 2 * (self._t(x) - a) / (b - a) - 1
-
-    def decode(self, z) -> dict[str, float]:
-        a, b = self._t(self.lo), self._t(self.hi)
-        t = a + (np.clip(np.asarray(z, float), -1, 1) + 1) / 2 * (b - a)
-        x = t.copy()
-        x[self.log] = 10.0 ** t[self.log]
-        return dict(zip(self.names, map(float, x), strict=True))
-
-    def grid(self, levels: dict, default: int) -> list[dict[str, float]]:
-        axes = [np.linspace(-1, 1, levels.get(n, default)) for n in self.names]
-        pts = np.array(np.meshgrid(*axes, indexing="ij")).reshape(len(axes), -1).T
-        return [self.decode(z) for z in pts]
-
-
-def calibrate(ev: Evaluator, effect: dict, params, label: str, refine: int = 2,
-              points_1d: int = 5, points_2d: int = 3,
-              seeds: Sequence[dict] = (), levels: dict | None = None) -> Candidate:
-    """Surrogate-assisted calibration of one effect's parameters (see module docstring);
-    ``seeds`` are extra design points suggested by the evidence."""
-    import warnings
-
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.gaussian_process import GaussianProcessRegressor
-    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
-
-    cod = Coding(params)
-    base = Variant.of([effect])
-    cand = Candidate(effect=effect["name"], attach=effect.get("attach", ""), params=cod.names)
-    k = len(cod.names)
-
-    def run(points: list[dict]) -> None:
-        vecs = ev.evaluate([base.with_params(x) for x in points], label)
-        cand.evaluations += [Evaluation(x, v) for x, v in zip(points, vecs, strict=True)]
-
-    design = cod.grid(levels or {}, points_1d if k == 1 else points_2d)
-    run(design + [sd for sd in seeds if set(sd) == set(cod.names)])
-    dense = np.array(np.meshgrid(*[np.linspace(-1, 1, 201 if k == 1 else 41)] * k,
-                                 indexing="ij")).reshape(k, -1).T
-    for _ in range(refine):
-        ok = [e for e in cand.evaluations if e.vector is not None]
-        if len(ok) < 3:
-            break
-        Z = np.array([cod.code(e.values) for e in ok])
-        y = np.log(np.array([e.error for e in ok]) + 1e-6)
-        kernel = ConstantKernel(1.0) * RBF([0.5] * k, (0.05, 10.0)) + \
-            WhiteKernel(1e-3, (1e-8, 1e-1))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)  # small designs, by design
-            gp = GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=2,
-                                          random_state=0).fit(Z, y)
-        x_best = cod.decode(dense[int(np.argmin(gp.predict(dense)))])
-        if any(np.allclose(cod.code(x_best), cod.code(e.values), atol=1e-6)
-               for e in cand.evaluations):
-            break
-        run([x_best])
-    return cand
-
-
-def evidence(effect_cls, before, after) -> list[str]:
-    """What the measurement shows that this effect explains (words for the report)."""
-    out = []
-    b0, a0 = before[0], after[0] if after else None
-    thd_ratio = b0.thd_measured / b0.thd_model if b0.thd_model else float("nan")
-    if np.isfinite(thd_ratio) and abs(np.log(thd_ratio)) > np.log(1.25):
-        out.append(f"measured THD {b0.thd_measured:.2f} % vs model {b0.thd_model:.2f} % "
-                   f"({thd_ratio:.2f}x)")
-    shifts = [r for r in b0.resonances if r["shift_pct"] is not None and
-              abs(r["shift_pct"]) > 1.0]
-    if shifts:
-        out.append("resonances shifted: " + ", ".join(
-            f"{r['measured_hz']:.0f} Hz measured vs {r['model_hz']:.0f} Hz model"
-            for r in shifts[:3]))
-    missing = [r for r in b0.resonances if r["model_hz"] is None]
-    if missing:
-        out.append("measured peaks without a model mode: " + ", ".join(
-            f"{r['measured_hz']:.0f} Hz" for r in missing[:3]))
-    worst = sorted(b0.bands, key=lambda b: -abs(b["mean_db"]))[:2]
-    if worst and abs(worst[0]["mean_db"]) > 1.0:
-        out.append("largest FRF differences in the bands " + ", ".join(
-            f"{b['centre_hz']:.0f} Hz ({b['mean_db']:+.1f} dB)" for b in worst))
-    if a0 is not None:
-        out.append(f"with the effect calibrated the FRF error falls from "
-                   f"{b0.frf_rms_db:.2f} dB to {a0.frf_rms_db:.2f} dB and the THD gap from "
-                   f"{b0.thd_model:.2f}/{b0.thd_measured:.2f} % to "
-                   f"{a0.thd_model:.2f}/{a0.thd_measured:.2f} %")
-    out.append("this effect typically shows: " + "; ".join(effect_cls.signatures))
-    return out
+def _effect_axes(effect) -> list:
+    return list(effect.parameters())
 
 
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
-             candidates: Sequence[str] | None = None, min_delta_bic: float = 10.0,
-             min_reduction: float = 0.3, refine_top: int = 3, refine_iterations: int = 5,
-             log=lambda s: None) -> dict:
-    """Rank the candidate effects (all registered ones by default); see module docstring.
-    The ``refine_top`` best candidates after the surrogate stage get a local search of
-    ``refine_iterations`` compass steps before the final ranking."""
-    ev = Evaluator(study, measurements, runner)
-    names = list(candidates) if candidates else effect_registry.names()
-    places = model_with_effects(study, []).places()
-    base_cmp = ev.comparisons([Variant()], "baseline")[0]
-    if base_cmp is None:
+             candidates: Sequence[str] | None = None, refine: int = 3,
+             min_delta_bic: float = 10.0, budget: int = 300, log: Log = lambda s: None
+             ) -> DiagnoseResult:
+    """Diagnose the missing physics (module docstring). ``candidates`` are effect names
+    (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it fits);
+    ``budget`` caps the simulations of the calibrations (screens and held-out predictions
+    come on top, a few per candidate)."""
+    names, source = calibration_variables(study, runner, log)
+    space = study.calibration_space(names)
+    ev = Evaluator(study, measurements, runner, space)
+    base_coords = Coordinates.of(space)
+    nominal_values = space.nominal_row()
+    (nominal_cmp,) = ev.comparisons([ev.variant(None, nominal_values)], "nominal model")
+    if nominal_cmp is None:
         raise SensfwError("the study's model failed at the measured level(s); nothing to "
-                          "compare")
-    base_vec = discrepancy(base_cmp)
-    bic0 = bic(base_vec, 0)
-    cands: dict[tuple[str, str], tuple] = {}
-    for name in names:
+                          "compare (see the run store)")
+    n = ev.entries.size()
+    start = Evaluation(nominal_values, ev.weighted(nominal_cmp))
+    log(f"H0: calibrating {', '.join(names)} ({source})")
+    h0 = Hypothesis(None, "", base_coords)
+    h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), base_coords,
+                       start, budget=budget // 4, log=log)
+    (h0_cmp,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
+    found = _signature_classes(h0_cmp)
+    hyps = _hypotheses(study, candidates, found, base_coords, log)
+    log(f"{len(hyps)} candidate(s) after the signature classes {sorted(found) or '(none)'}")
+    _screen(ev, h0, hyps, h0_cmp, log)
+    ranked = sorted(hyps, key=lambda h: h.screen_chi2)
+    chosen = [h for h in ranked[:refine] if h.screen_chi2 < h0.fit.chi2 - 2.0]
+    spent = ev.n_simulations
+    for h in chosen:
+        left = max(budget - (ev.n_simulations - spent), 0)
+        log(f"calibrating {h.name} jointly with the base variables")
+        _calibrate_candidate(ev, h0, h, left // max(len(chosen), 1), log)
+    for h in ranked:  # screened only: their best evaluated point stands
+        if h.fit is None:
+            h.fit = Fit(coords=h.coords, best=h.screen_best, jacobian=None,
+                        evaluations=[h.screen_best])
+            h.notes.append("screened only (not among the best candidates)")
+    if len(measurements) >= 2:
+        for h in [h0, *chosen]:
+            h.heldout = _heldout(ev, h, log)
+    verdict, reason = _verdict(h0, chosen, n, min_delta_bic, len(measurements))
+    rows = [h0.row(n, None, ev)] + [h.row(n, h0, ev) for h in
+                                    sorted(hyps, key=lambda h: h.fit.chi2)]
+    winner = next((h for h in chosen if h.name == verdict), None)
+    best_cmp = None
+    if winner is not None:
+        (best_cmp,) = ev.comparisons([ev.variant(winner.spec, winner.fit.values)], "winner")
+    return DiagnoseResult(
+        verdict=verdict, reason=reason, variables=names, variables_from=source,
+        rows=rows, n_simulations=ev.n_simulations, n_entries=n,
+        signature_classes=found, nominal=nominal_cmp, calibrated=h0_cmp, best=best_cmp,
+        errors={"nominal": ev.rms_db(nominal_cmp), "parameters": ev.rms_db(h0_cmp),
+                "best": ev.rms_db(best_cmp) if best_cmp else None},
+        criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3,
+                  "model_db": discrepancy.MODEL_DB, "thd_db": discrepancy.THD_DB})
+
+
+@dataclass
+class DiagnoseResult:
+    verdict: str
+    reason: str
+    variables: list[str]
+    variables_from: str
+    rows: list[dict]
+    n_simulations: int
+    n_entries: int
+    signature_classes: dict
+    nominal: list
+    calibrated: list
+    best: list | None
+    errors: dict
+    criteria: dict
+
+    @property
+    def ranking(self) -> list[dict]:
+        return [r for r in self.rows if r["effect"] is not None]
+
+    def to_dict(self) -> dict:
+        return {"verdict": self.verdict, "reason": self.reason,
+                "calibration_variables": self.variables,
+                "calibration_variables_from": self.variables_from,
+                "parameters_only": self.rows[0], "ranking": self.ranking,
+                "n_simulations": self.n_simulations, "n_entries": self.n_entries,
+                "signature_classes": self.signature_classes, "errors_db": self.errors,
+                "criteria": self.criteria,
+                "comparison": {"nominal": [c.to_dict() for c in self.nominal],
+                               "parameters": [c.to_dict() for c in self.calibrated],
+                               "best": [c.to_dict() for c in self.best] if self.best
+                               else None}}
+
+
+def _signature_classes(comparisons) -> dict:
+    """The amplitude-dependence classes of the discrepancy (several levels only)."""
+    if comparisons is None or len(comparisons) < 2:
+        return {}
+    try:
+        from .signatures import classes
+    except ImportError:  # no classifier: allow every candidate
+        return {}
+    return classes(comparisons)
+
+
+def _allows(cls, found: Mapping) -> bool:
+    if not found:
+        return True
+    try:
+        from .signatures import allows
+    except ImportError:
+        return True
+    return allows(cls, found)
+
+
+def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: Log
+                ) -> list[Hypothesis]:
+    places = model_with_effects(study, []).places()
+    wanted = []
+    for c in candidates or effect_registry.names():
+        name, _, place = c.partition("@")
+        wanted.append((name.strip(), place.strip() or None))
+    out = []
+    for name, place in wanted:
         cls = effect_registry.get(name)
-        for attach in fitting_places(places, cls):
-            log(f"candidate {name}@{attach}")
-            eff = cls(attach=attach)
-            cand = calibrate(ev, eff.spec(), eff.parameters(), f"{name}",
-                             seeds=eff.seeds(base_cmp), levels=eff.design_levels)
-            cands[(name, attach)] = (cls, eff, cand)
-    # second round for the most promising: a local search on simulations, so that a
-    # narrow valley missed by the small design does not decide the ranking
-    ranked = sorted(cands.values(), key=lambda c: c[2].best().error)
-    for _, eff, cand in ranked[:refine_top]:
-        log(f"refining {eff.name}@{eff.attach}")
-        refine_local(ev, cand, eff.spec(), eff.parameters(), f"{eff.name} refine",
-                     max_iter=refine_iterations)
-    rows = []
-    for (name, attach), (cls, eff, cand) in cands.items():
-        best = cand.best()
-        if best.vector is None:
+        fits = fitting_places(places, cls)
+        if place is not None and place not in fits:
+            raise SensfwError(f"candidate {name}@{place}: the model has no place {place!r} "
+                              f"that {name} fits ({', '.join(fits)})")
+        if not _allows(cls, found):
+            log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
+                "measurement's; left out")
             continue
-        spec = eff.spec()
-        after_cmp = ev.comparisons([Variant.of([spec], best.values)], f"{name} confirm")[0]
-        k = len(cand.params)
-        score = bic(best.vector, k)
-        rows.append({
-            "effect": name, "attach": attach, "params": best.values,
-            "error_before": rms(base_vec), "error_after": best.error,
-            "reduction": 1 - best.error / rms(base_vec) if rms(base_vec) > 0 else 0.0,
-            "score": score, "delta_bic": bic0 - score, "n_params": k,
-            "n_evaluations": len(cand.evaluations),
-            "evidence": evidence(cls, base_cmp, after_cmp),
-        })
-    rows.sort(key=lambda r: r["score"])
-    top = rows[0] if rows else None
-    verdict = "none"
-    if top and top["delta_bic"] > min_delta_bic and top["reduction"] >= min_reduction:
-        verdict = top["effect"]
-    return {"verdict": verdict, "ranking": rows, "n_simulations": ev.n_simulations,
-            "baseline": {"error": rms(base_vec), "bic": bic0,
-                         "comparison": [c.to_dict() for c in base_cmp]},
-            "criteria": {"min_delta_bic": min_delta_bic, "min_reduction": min_reduction,
-                         "thd_weight": THD_WEIGHT,
-                         "dynamic_range_db": base_cmp[0].dynamic_range}}
+        for pl in [place] if place else fits:
+            eff = cls(attach=pl)
+            coords = Coordinates(base_coords.axes + Coordinates.of(None, _effect_axes(eff)).axes)
+            out.append(Hypothesis(eff, pl, coords))
+    return out
 
 
-def refine_local(ev: Evaluator, cand: Candidate, effect: dict, params, label: str,
-                 step: float = 0.25, min_step: float = 0.002, max_iter: int = 14) -> Candidate:
-    """Compass search around the best point on actual simulations: the 2k neighbours at
-    +-``step`` (coded units) are simulated together (in parallel); move to the best if it
-    improves, else halve the step."""
-    cod = Coding(params)
-    base = Variant.of([effect])
-    best = cand.best()
-    z, err = cod.code(best.values), best.error
-    for _ in range(max_iter):
-        if step < min_step:
+def _screen(ev: Evaluator, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, log: Log
+            ) -> None:
+    """Each candidate at its probes from H0's point: score = the lowest chi2 along the line
+    from H0 (its neutral point) through each probe, up to twice the probe's strength
+    (linear in the residuals), or the probe's own chi2."""
+    base = h0.fit.values
+    w0 = h0.fit.best.w
+    batch = []
+    for h in hyps:
+        neutral = dict(h.effect.neutral)
+        for probe in h.effect.probes(h0_cmp):
+            values = {**base, **{p.name: p.nominal for p in h.effect.parameters()},
+                      **neutral, **probe}
+            batch.append((h, values))
+    results: dict[int, list] = {}
+    for h in hyps:  # one batch per hypothesis (its effect spec is part of every run)
+        pts = [v for hh, v in batch if hh is h]
+        results[id(h)] = list(zip(pts, ev.evaluate(h.spec, pts, f"screen {h.name}"),
+                                  strict=True))
+    for h in hyps:
+        best_chi2, best = h0.fit.chi2, Evaluation({**base, **h.effect.neutral,
+                                                   **_fill(h.effect, base)}, w0)
+        for values, w in results[id(h)]:
+            if w is None:
+                continue
+            d = w - w0
+            dd = float(d @ d)
+            c = float(np.clip(-(w0 @ d) / dd, 0.0, 2.0)) if dd > 0 else 0.0
+            line = float(np.sum((w0 + c * d) ** 2))
+            own = float(np.sum(w * w))
+            best_chi2 = min(best_chi2, line, own)
+            if own < best.chi2:
+                best = Evaluation(values, w)
+        h.screen_chi2 = best_chi2
+        h.screen_best = best
+        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {best_chi2:.4g} (line)")
+
+
+def _fill(effect, base: Mapping[str, float]) -> dict[str, float]:
+    """Effect parameters at their nominal values overridden by the neutral ones."""
+    return {**{p.name: p.nominal for p in effect.parameters()}, **effect.neutral}
+
+
+def _calibrate_candidate(ev: Evaluator, h0: Hypothesis, h: Hypothesis, budget: int,
+                         log: Log) -> None:
+    start = h.screen_best
+    h.fit = calibrate(lambda pts: ev.evaluate(h.spec, pts, f"calibrate {h.name}"),
+                      h.coords, start, budget=max(budget, 2 * len(h.coords) + 4), log=log)
+    # an effect parameter on a bound that is not its neutral value: start again from the
+    # other side before reporting it as on its bound
+    z = h.fit.z
+    own = {p.name for p in h.effect.parameters()}
+    for i, a in enumerate(h.coords.axes):
+        if a.name not in own:
+            continue
+        neutral = h.effect.neutral.get(a.name)
+        at = a.decode(z[i])
+        if abs(z[i]) >= 0.98 and not (neutral is not None and math.isclose(at, neutral,
+                                                                         abs_tol=1e-12)):
+            other = dict(h.fit.values)
+            other[a.name] = a.decode(-0.5 * np.sign(z[i]))
+            (w,) = ev.evaluate(h.spec, [other], f"restart {h.name}")
+            again = calibrate(lambda pts: ev.evaluate(h.spec, pts, f"restart {h.name}"),
+                              h.coords, Evaluation(other, w), budget=budget // 2, log=log)
+            h.notes.append(f"{a.name} ended on its bound; restarted from the other side: "
+                           f"chi2 {h.fit.chi2:.4g} vs {again.chi2:.4g}")
+            if again.chi2 < h.fit.chi2:
+                again.evaluations = h.fit.evaluations + again.evaluations
+                h.fit = again
             break
-        trials = []
-        for i in range(len(z)):
-            for s in (-step, step):
-                zz = z.copy()
-                zz[i] = np.clip(zz[i] + s, -1, 1)
-                if not np.allclose(zz, z):
-                    trials.append(zz)
-        if not trials:
-            break
-        xs = [cod.decode(t) for t in trials]
-        vecs = ev.evaluate([base.with_params(x) for x in xs], label)
-        improved = False
-        for t, x, vec in zip(trials, xs, vecs, strict=True):
-            e = Evaluation(x, vec)
-            cand.evaluations.append(e)
-            if e.error < err - 1e-9:
-                z, err, improved = t, e.error, True
-        if not improved:
-            step /= 2
-    return cand
+    if h.fit.chi2 > h0.fit.chi2:  # cannot happen from the neutral start; guard the claim
+        raise SensfwError(f"internal: {h.name} ended worse than the hypothesis it extends")
 
 
-def refine_simplex(ev: Evaluator, cand: Candidate, effect: dict, params, label: str,
-                   size: float = 0.05, max_evaluations: int = 30) -> Candidate:
-    """Nelder-Mead on actual simulations from the best point (coded units, clipped to the
-    bounds): follows curved valleys (e.g. frequency and damping of a light mode) where the
-    compass search stalls."""
-    from scipy.optimize import minimize
+def _heldout(ev: Evaluator, h: Hypothesis, log: Log) -> float | None:
+    """Mean held-out chi2 per entry: each level left out in turn, the calibration moved by
+    one Gauss-Newton step fitted to the other levels, the left-out level simulated."""
+    fit = h.fit
+    J, w = fit.jacobian, fit.best.w
+    slices = ev.entries.level_slices()
+    z = fit.z
+    total, count = 0.0, 0
+    for lev, sl in enumerate(slices):
+        keep = np.ones(len(w), bool)
+        keep[sl] = False
+        if J is not None and len(z):
+            Jk, wk = J[keep], w[keep]
+            A = Jk.T @ Jk
+            step = -np.linalg.solve(A + 1e-3 * np.diag(np.maximum(np.diag(A), 1e-12)),
+                                    Jk.T @ wk)
+            zl = np.clip(z + step, -1, 1)
+            values = {**fit.values, **h.coords.decode(zl)}
+        else:
+            values = fit.values
+        (wl,) = ev.evaluate(h.spec, [values], f"held-out level {lev + 1} {h.name}",
+                            levels=[lev])
+        if wl is None:
+            return math.inf
+        total += float(np.sum(wl * wl))
+        count += len(wl)
+    return total / max(count, 1)
 
-    cod = Coding(params)
-    base = Variant.of([effect])
 
-    def f(z):
-        x = cod.decode(z)
-        vec = ev.evaluate([base.with_params(x)], label)[0]
-        e = Evaluation(x, vec)
-        cand.evaluations.append(e)
-        return e.error
-
-    z0 = cod.code(cand.best().values)
-    simplex = [z0] + [np.clip(z0 + size * np.eye(len(z0))[i], -1, 1) for i in range(len(z0))]
-    minimize(f, z0, method="Nelder-Mead",
-             options={"initial_simplex": np.array(simplex), "maxfev": max_evaluations,
-                      "xatol": 1e-4, "fatol": 1e-4})
-    return cand
-
-
-def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, effect: str,
-            attach: str | None = None, start: Mapping[str, float] | None = None,
-            log=lambda s: None) -> dict:
-    """Add ``effect`` to the model and calibrate it: the error trajectory (baseline, effect
-    added at its nominal values, calibrated) and the calibrated parameter values. ``start``
-    (e.g. the values :func:`diagnose` found) replaces the surrogate-assisted design by a
-    local search from that point."""
-    ev = Evaluator(study, measurements, runner)
-    cls = effect_registry.get(effect)
-    eff = cls(attach=attach)
-    model_with_effects(study, [eff])  # resolves (and checks) where the effect attaches
-    spec = eff.spec()
-    params = eff.parameters()
-    base_cmp = ev.comparisons([Variant()], "baseline")[0]
-    if base_cmp is None:
-        raise SensfwError("the study's model failed at the measured level(s)")
-    nominal = {p.name: p.nominal for p in params}
-    added = ev.evaluate([Variant.of([spec], nominal)], f"{effect} added")[0]
-    log(f"calibrating {effect}@{eff.attach}")
-    if start is None:
-        cand = calibrate(ev, spec, params, effect, refine=3, seeds=eff.seeds(base_cmp),
-                         levels=cls.design_levels)
-    else:
-        names = [p.name for p in params]
-        if set(start) != set(names):
-            raise SensfwError(f"start values for {effect} must give exactly {names}, got "
-                              f"{sorted(start)}")
-        x0 = {n: float(start[n]) for n in names}
-        cand = Candidate(effect=effect, attach=eff.attach, params=names, evaluations=[
-            Evaluation(x0, ev.evaluate([Variant.of([spec], x0)], f"{effect} start")[0])])
-    cand = refine_local(ev, cand, spec, params, f"{effect} refine")
-    cand = refine_simplex(ev, cand, spec, params, f"{effect} refine")
-    best = cand.best()
-    after = ev.comparisons([Variant.of([spec], best.values)], f"{effect} calibrated")[0]
-    trajectory = [
-        {"step": "baseline", "error": rms(discrepancy(base_cmp)), "params": {}},
-        {"step": "effect added", "error": rms(added) if added is not None else None,
-         "params": nominal},
-        {"step": "calibrated", "error": best.error, "params": best.values},
-    ]
-    return {"effect": effect, "attach": eff.attach, "params": best.values,
-            "trajectory": trajectory, "n_simulations": ev.n_simulations,
-            "evidence": evidence(cls, base_cmp, after),
-            "comparison": {"baseline": [c.to_dict() for c in base_cmp],
-                           "calibrated": [c.to_dict() for c in after] if after else None},
-            "evaluations": [{"params": e.values, "error": e.error if e.vector is not None
-                             else None} for e in cand.evaluations]}
+def _verdict(h0: Hypothesis, chosen: Sequence[Hypothesis], n: int, min_delta_bic: float,
+             n_levels: int) -> tuple[str, str]:
+    bic0 = h0.fit.chi2 + h0.k * math.log(n)
+    if discrepancy.fits(h0.fit.best.w, h0.k):
+        return "parameters", (f"recalibrating the base parameters explains the measurement "
+                              f"to its noise (chi2 {h0.fit.chi2:.1f} for {n} entries)")
+    best, best_bic = None, bic0 - min_delta_bic
+    for h in chosen:
+        bic = h.fit.chi2 + h.k * math.log(n)
+        if bic < best_bic and (n_levels < 2 or h0.heldout is None or
+                               (h.heldout is not None and h.heldout < h0.heldout)):
+            best, best_bic = h, bic
+    if best is None:
+        return "none", ("no candidate explains the discrepancy clearly better than the "
+                        f"recalibrated parameters (dBIC > {min_delta_bic:g}"
+                        + (" and a better held-out level" if n_levels >= 2 else "") + ")")
+    return best.name, (f"dBIC {bic0 - best_bic:.1f} over the recalibrated parameters"
+                       + (f"; held-out chi2/entry {best.heldout:.2f} vs {h0.heldout:.2f}"
+                          if best.heldout is not None and h0.heldout is not None else ""))

@@ -1,0 +1,112 @@
+"""The discrepancy between a model and the measurements as a weighted residual vector.
+
+For every measured level (a :class:`~sensfw.measure.compare.LevelComparison`) the entries
+are the dB differences model - measurement of the FRF in the one-third-octave bands the
+measurement can speak for (its ``used_bands``: within the dynamic range and above its own
+noise) and of the THD. Each entry is divided by its standard error, so that a correct model
+leaves residuals of unit variance:
+
+* a band's standard error is the measurement's own (``noise_db``, from its noise:
+  :func:`~sensfw.measure.compare.band_noise`) combined with ``MODEL_DB``, a floor for what
+  no parameter of a good model can fix (the band estimator's own structure, the drive's
+  interpolation; measured as the error of the true model against noise-free synthetic data,
+  0.1-0.3 dB in ``tests/measure/test_diagnose.py``);
+* the THD's is ``THD_DB`` (harmonic amplitudes of a short sweep scatter by about 1 dB with
+  2 % noise).
+
+The entries depend on the measurement only, so every hypothesis is scored on the same
+vector. Then ``chi2 = sum w^2`` is chi-square distributed with ``n - k`` degrees of freedom
+for a correct model with ``k`` calibrated parameters (the goodness-of-fit test of
+:func:`fits`), and ``BIC = chi2 + k ln n`` (Schwarz 1978, known variances) ranks
+hypotheses.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2 as chi2_dist
+
+#: standard error floor (dB) of a band entry: model-form tolerance
+MODEL_DB = 0.3
+#: standard error (dB) of the THD entry
+THD_DB = 1.5
+#: the entry of a band where the model has no finite response
+MISSING_DB = 40.0
+
+
+@dataclass(frozen=True)
+class Entries:
+    """Which bands (by centre frequency) of which level enter the residual vector."""
+
+    bands: tuple[tuple[float, ...], ...]  # per level, the centre frequencies used
+    thd: tuple[bool, ...]  # per level, whether the THD enters
+
+    @classmethod
+    def of(cls, comparisons) -> Entries:
+        return cls(bands=tuple(tuple(b["centre_hz"] for b in c.used_bands)
+                               for c in comparisons),
+                   thd=tuple(bool(c.thd_measured) for c in comparisons))
+
+    def size(self) -> int:
+        return sum(len(b) for b in self.bands) + sum(self.thd)
+
+    def level_slices(self) -> list[slice]:
+        out, i = [], 0
+        for b, t in zip(self.bands, self.thd, strict=True):
+            n = len(b) + int(t)
+            out.append(slice(i, i + n))
+            i += n
+        return out
+
+
+def residuals(comparisons: Sequence, entries: Entries) -> tuple[np.ndarray, np.ndarray]:
+    """(dB differences, standard errors) over ``entries`` (see the module docstring). A
+    model without harmonics where the measurement has some (THD 0) gets a large but finite
+    entry."""
+    r, s = [], []
+    for c, centres, thd in zip(comparisons, entries.bands, entries.thd, strict=True):
+        by = {b["centre_hz"]: b for b in c.bands}
+        for centre in centres:
+            b = by.get(centre)
+            if b is None:  # the model has no response there at all: a gross misfit
+                r.append(MISSING_DB)
+                s.append(MODEL_DB)
+                continue
+            r.append(b["mean_db"])
+            s.append(math.hypot(b.get("noise_db") or 0.0, MODEL_DB))
+        if thd:
+            model = max(c.thd_model or 0.0, 1e-3)
+            r.append(20 * math.log10(model / c.thd_measured))
+            s.append(THD_DB)
+    return np.array(r, float), np.array(s, float)
+
+
+def weighted(comparisons: Sequence, entries: Entries) -> np.ndarray:
+    r, s = residuals(comparisons, entries)
+    return r / s
+
+
+def chi2(w: np.ndarray) -> float:
+    return float(np.sum(np.square(w)))
+
+
+def bic(w: np.ndarray, k: int) -> float:
+    """Schwarz's criterion with known variances: ``chi2 + k ln n``."""
+    return chi2(w) + k * math.log(len(w))
+
+
+def fits(w: np.ndarray, k: int, alpha: float = 1e-3) -> bool:
+    """Whether the residuals are what the measurement noise alone explains (chi-square test
+    at level ``alpha`` with ``n - k`` degrees of freedom)."""
+    dof = max(len(w) - k, 1)
+    return chi2(w) <= float(chi2_dist.ppf(1 - alpha, dof))
+
+
+def rms_db(comparisons: Sequence, entries: Entries) -> float:
+    """RMS of the dB differences (unweighted): the error a user reads."""
+    r, _ = residuals(comparisons, entries)
+    return float(np.sqrt(np.mean(r * r))) if len(r) else 0.0
