@@ -33,10 +33,13 @@ class StudyError(SensfwError):
 class UnknownPluginError(SensfwError, KeyError):
     """A plugin name is not registered; the message lists the available names."""
 
-    def __init__(self, kind: str, name: str, available: Iterable[str]):
+    def __init__(self, kind: str, name: str, available: Iterable[str],
+                 reason: str | None = None):
         self.kind, self.name, self.available = kind, name, sorted(available)
+        why = f" ({reason})" if reason else ""
         super().__init__(
-            f"unknown {kind} {name!r}; available: {', '.join(self.available) or '(none)'}"
+            f"unknown {kind} {name!r}{why}; available: "
+            f"{', '.join(self.available) or '(none)'}"
         )
 
     def __str__(self) -> str:  # KeyError would quote the message

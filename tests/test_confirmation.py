@@ -8,7 +8,7 @@ STUDY = """
 name = "confirm"
 seed = 3
 [model]
-name = "noisy_quadratic"
+name = "sensfw_test_models:NoisyQuadratic"
 options = { noise = 0.2 }
 [execution]
 backend = "serial"

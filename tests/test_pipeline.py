@@ -22,8 +22,7 @@ def stages(path):
 
 
 def test_quick_study_runs_the_three_steps(quick):
-    out, wall = quick
-    assert wall < 60, wall
+    out, _ = quick
     data, st = stages(out / "results.json")
     k = len(st["screen"]["variables"])
     assert st["screen"]["n_runs"] == 2 * k + 1
@@ -88,7 +87,7 @@ FAULTY = """
 [study]
 name = "faulty"
 [model]
-name = "fault_injection"
+name = "sensfw_test_models:FaultInjection"
 options = {{ model = "two_dof", diverge = {{ parameter = "k1", above = 7000.0 }} }}
 output = "a1"
 [excitation]
