@@ -338,14 +338,12 @@ def augment(
     progress: ShowProgress = True,
 ) -> None:
     """Add a physical effect, calibrate it, write the augmented study and the error path."""
-    import tomllib
-
     from .measure.diagnose import augment as run_augment
     from .measure.session import load_measurements
     from .plugins import effects
     from .report.measure import write_augment_report
     from .study import Study
-    from .tomlw import dumps
+    from .studyfile import add_effect
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
@@ -356,20 +354,15 @@ def augment(
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = run_augment(study, meas, runner, name, attach or None, start=start,
                              log=lambda s: console.print(f"[cyan]{s}"))
-    data = tomllib.loads(study_file.read_text())
-    model = data.setdefault("model", {})
-    opts = model.setdefault("options", {})
-    opts["effects"] = [*opts.get("effects", []), {"name": name, "attach": result["attach"]}]
-    params = data.setdefault("parameters", {})
     declared = {p.name: p for p in effects.get(name)().parameters()}
-    for k, v in result["params"].items():
-        p = declared[k]
-        params[k] = {"min": p.min, "nominal": float(v), "max": p.max}
-    data.setdefault("study", {})["description"] = (
-        data["study"].get("description", "") + f" [augmented with {name}, calibrated against "
-        f"{', '.join(m.file for m in meas)}]").strip()
+    calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
+                  for k, v in result["params"].items()}
+    note = (f"[augmented with {name}, calibrated against "
+            f"{', '.join(m.file for m in meas)}]")
+    text = add_effect(study_file.read_text(encoding="utf-8"), name, result["attach"],
+                      calibrated, note)
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "study.toml").write_text(dumps(data))
+    (out_dir / "study.toml").write_text(text, encoding="utf-8")
     Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
     _json(out_dir / "augment.json", result)
     write_augment_report(study, result, out_dir / "report.html")

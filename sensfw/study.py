@@ -254,7 +254,7 @@ class Study:
     def load(cls, path: str | Path) -> Study:
         path = Path(path)
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise StudyError([("", "file not found")], str(path)) from None
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:

@@ -97,7 +97,7 @@ def test_two_levels_amplitude_dependence_reported_and_used(study, runner, cli, t
     files = [measurement(study, tmp_path, text, seed=1, amplitude=0.05, name="lo.csv"),
              measurement(study, tmp_path, text, seed=2, amplitude=0.2, name="hi.csv")]
     study_file = tmp_path / "s.toml"
-    from sensfw.tomlw import dumps
+    from tomlkit import dumps
 
     study_file.write_text(dumps(short_quick()))
     args = [a for f in files for a in ("-m", f)]
@@ -120,7 +120,7 @@ def test_augment_start_from_a_diagnose_file_without_the_effect_is_a_clear_error(
         study, cli, tmp_path):
     meas = measurement(study, tmp_path, None, seed=3)
     study_file = tmp_path / "s.toml"
-    from sensfw.tomlw import dumps
+    from tomlkit import dumps
 
     study_file.write_text(dumps(short_quick()))
     diag = tmp_path / "diagnose.json"

@@ -7,7 +7,7 @@ import json
 import tomllib
 from pathlib import Path
 
-from sensfw.tomlw import dumps
+from tomlkit import dumps
 
 ROOT = Path(__file__).resolve().parents[2]
 

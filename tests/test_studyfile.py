@@ -1,0 +1,68 @@
+"""Study files edited with tomlkit (``sensfw augment``): the user's comments and layout stay,
+the added lines load back (issue 12, item 4)."""
+
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from sensfw.plugins import effects
+from sensfw.study import Study
+from sensfw.studyfile import add_effect
+
+ROOT = Path(__file__).resolve().parents[1]
+QUICK = (ROOT / "studies" / "quick.toml").read_text(encoding="utf-8")
+
+
+def calibrated(name, scale=1.1):
+    return {p.name: {"min": p.min, "nominal": p.nominal * scale, "max": p.max}
+            for p in effects.get(name)().parameters()}
+
+
+def comment_lines(text):
+    return [ln for ln in text.splitlines() if "#" in ln]
+
+
+def test_augmenting_quick_keeps_every_comment_and_loads(tmp_path):
+    assert len(comment_lines(QUICK)) >= 3  # full-line and end-of-line comments
+    params = calibrated("flexible_mode")
+    text = add_effect(QUICK, "flexible_mode", "crankshaft", params, "[augmented 😀]")
+    new_lines = text.splitlines()
+    for line in QUICK.splitlines():  # every original line, comments included, is still there
+        assert line in new_lines, line
+    f = tmp_path / "study.toml"
+    f.write_text(text, encoding="utf-8")
+    study = Study.load(f)
+    data = tomllib.loads(text)
+    assert data["model"]["options"]["effects"] == [{"name": "flexible_mode",
+                                                    "attach": "crankshaft"}]
+    for k, v in params.items():
+        assert data["parameters"][k] == pytest.approx(v)
+        assert study.parameters[k].nominal == pytest.approx(v["nominal"])
+    assert data["study"]["description"] == "[augmented 😀]"
+    # the rest of the study reads exactly as before
+    before = tomllib.loads(QUICK)
+    assert data["stages"] == before["stages"] and data["excitation"] == before["excitation"]
+
+
+@pytest.mark.parametrize("existing", [
+    '[model]\nname = "shaft_assembly"  # the model\n'
+    'options = { effects = [{ name = "damping" }] }\n',
+    '[model]\nname = "shaft_assembly"\n\n# an effect already there\n'
+    '[[model.options.effects]]\nname = "damping"\n',
+])
+def test_an_effect_is_appended_to_the_effects_already_there(existing):
+    head = QUICK.split("[model]")[0]
+    rest = QUICK.split("[excitation]")[1]
+    text = head + existing + "\n[excitation]" + rest
+    out = add_effect(text, "flexible_mode", "crankshaft", {}, "")
+    assert all(c in out for c in comment_lines(text))
+    eff = tomllib.loads(out)["model"]["options"]["effects"]
+    assert [e["name"] for e in eff] == ["damping", "flexible_mode"]
+
+
+def test_non_ascii_strings_round_trip():
+    # the hand-written writer this replaces wrote "😀" as a surrogate pair tomllib rejects
+    for s in ("😀", "é ü ß", 'quote " and \\ backslash', "tab\tnew\nline", "\u2028"):
+        out = add_effect(QUICK, "flexible_mode", "crankshaft", {}, s)
+        assert tomllib.loads(out)["study"]["description"] == s
