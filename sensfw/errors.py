@@ -46,6 +46,15 @@ class UnknownPluginError(SensfwError, KeyError):
         return self.args[0]
 
 
+class OptionError(SensfwError, ValueError):
+    """A plugin (design, scorer, surrogate) got a bad option; ``option`` names it (None: the
+    options together), so a study can report it at its dotted path."""
+
+    def __init__(self, message: str, option: str | None = None):
+        super().__init__(message)
+        self.option = option
+
+
 class ParameterError(SensfwError, ValueError):
     """A parameter value is unknown, not finite or outside its bounds."""
 

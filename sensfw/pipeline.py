@@ -169,19 +169,17 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                 continue
             result.surrogates[label][name] = est
             result.validation[label][name] = validate(est, X, y[ok], seed=study.spec.study.seed)
-            summary = getattr(est, "summary_", None)
-            if summary is not None and label not in result.regression:
-                coefs = getattr(est, "coefficients_physical_", None)
-                if coefs is None:
-                    coefs = est.coefficients_
+            if est.summary_ is not None and est.coefficient_table_ is not None \
+                    and label not in result.regression:
                 result.regression[label] = {
                     "surrogate": name,
                     "options": {k: v for k, v in opts.items() if k != "bounds"},
-                    **{k: summary.get(k) for k in ("r2", "r2_adj", "q2", "f_stat", "f_pvalue",
-                                                   "n_obs")},
-                    "coefficients": _jsonable(coefs[["term", "estimate", "se", "t", "p"]]),
+                    **{k: est.summary_.get(k) for k in ("r2", "r2_adj", "q2", "f_stat",
+                                                        "f_pvalue", "n_obs")},
+                    "coefficients": _jsonable(
+                        est.coefficient_table_[["term", "estimate", "se", "t", "p"]]),
                     "coefficients_coded": _jsonable(
-                        est.coefficients_[["term", "estimate", "se", "t", "p"]]),
+                        est.coefficient_table_coded_[["term", "estimate", "se", "t", "p"]]),
                 }
 
 

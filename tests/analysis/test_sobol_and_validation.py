@@ -54,13 +54,13 @@ def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
     gp = make_surrogate("gaussian_process", bounds=ISHIGAMI_BOUNDS).fit(X, y)
     m = gp.model_
     Xs = (X.to_numpy() - gp.lo_) / gp.span_
-    yn = (y - m._y_train_mean) / m._y_train_std
+    yn = (y - gp.y_mean_) / gp.y_scale_
     ref = np.empty(len(y))
     for i in range(len(y)):
         keep = np.arange(len(y)) != i
         fixed = GaussianProcessRegressor(m.kernel_, optimizer=None, alpha=m.alpha)
         fixed.fit(Xs[keep], yn[keep])
-        ref[i] = fixed.predict(Xs[i : i + 1])[0] * m._y_train_std + m._y_train_mean
+        ref[i] = fixed.predict(Xs[i : i + 1])[0] * gp.y_scale_ + gp.y_mean_
     np.testing.assert_allclose(gp.loo_predict(), ref, rtol=1e-8, atol=1e-8 * np.std(y))
     q2 = validate(gp, X, y)["q2_loo"]
     assert q2 == pytest.approx(1 - np.sum((y - ref) ** 2) / np.sum((y - y.mean()) ** 2),
