@@ -168,7 +168,7 @@ def option_problems(cls, options: dict[str, Any]) -> list[tuple[str | None, str]
         return problems
     try:
         est = cls(**options)
-    except (SurrogateError, TypeError, ValueError) as err:
+    except Exception as err:  # a third-party constructor may raise anything on a bad value
         return [(getattr(err, "option", None), str(err))]
     constraints = getattr(cls, "_parameter_constraints", {}) or {}
     params = est.get_params(deep=False) if hasattr(est, "get_params") else options
@@ -178,7 +178,7 @@ def option_problems(cls, options: dict[str, Any]) -> list[tuple[str | None, str]
         try:
             validate_parameter_constraints({key: constraints[key]}, {key: value},
                                            caller_name=cls.__name__)
-        except InvalidParameterError as err:
+        except (InvalidParameterError, TypeError, ValueError) as err:
             m = _PARAM.match(str(err))
             problems.append((m.group(1) if m else key, str(err)))
     if problems:
@@ -187,6 +187,6 @@ def option_problems(cls, options: dict[str, Any]) -> list[tuple[str | None, str]
     if check is not None:
         try:
             check()
-        except SurrogateError as err:
-            problems.append((err.option, str(err)))
+        except Exception as err:
+            problems.append((getattr(err, "option", None), str(err)))
     return problems
