@@ -131,6 +131,7 @@ def run(
         out.print(f"at most {total} runs (+1 nominal reference); cached runs are not recomputed")
         return
     out_dir.mkdir(parents=True, exist_ok=True)
+    _keep_study_file(study_file, out_dir)
     runner = _runner(study, out_dir, workers, backend, scheduler, retry_failed, progress)
     t0 = time.perf_counter()
     try:
@@ -157,6 +158,32 @@ def run(
                 adj = "n/a" if v.get("r2_adj") is None else f"{v['r2_adj']:.3f}"
                 out.print(f"  {st['name']}: {label} / {name}: R2adj={adj} "
                           f"Q2(LOO)={v['q2_loo']:.3f}")
+
+
+def _keep_study_file(study_file: Path, out_dir: Path) -> None:
+    """Copy the study file into the output folder (``study.toml``), so that the folder
+    alone rebuilds its report (``sensfw report DIR``)."""
+    import shutil
+
+    target = out_dir / "study.toml"
+    if not target.exists() or not target.samefile(study_file):
+        shutil.copyfile(study_file, target)
+
+
+@app.command()
+@_user_errors
+def report(
+    out_dir: Annotated[Path, typer.Argument(help="output folder of `sensfw run`")],
+) -> None:
+    """Rebuild DIR/report.html from DIR/results.json, DIR/study.toml and the run store,
+    without simulating (analyses and surrogates are refitted to the stored scores)."""
+    from .pipeline import load_result
+    from .report.study import write_study_report
+
+    t0 = time.perf_counter()
+    result = load_result(out_dir)
+    path = write_study_report(result, out_dir / "report.html")
+    out.print(f"-> {path} ({time.perf_counter() - t0:.1f} s, no simulation)")
 
 
 @app.command()
