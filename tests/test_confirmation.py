@@ -3,6 +3,10 @@ coverage on a test function with known noise (issue 5, item 4)."""
 
 import json
 
+import pytest
+
+pytestmark = pytest.mark.slow  # studies with hundreds of runs and surrogate fits
+
 STUDY = """
 [study]
 name = "confirm"

@@ -29,6 +29,7 @@ def cluster():
         yield c
 
 
+@pytest.mark.slow
 def test_dask_backend_gives_identical_results(quick, cli, cluster, tmp_path):
     ref, _ = quick
     proc = cli("run", QUICK, "--out", tmp_path, "--scheduler", cluster.scheduler_address,
@@ -40,6 +41,7 @@ def test_dask_backend_gives_identical_results(quick, cli, cluster, tmp_path):
     assert got["stages"] == want["stages"]
 
 
+@pytest.mark.slow
 def test_killed_dask_worker_loses_and_duplicates_nothing(cluster, tmp_path):
     from distributed import Client
 

@@ -13,6 +13,7 @@ from sensfw.testing import ISHIGAMI_BOUNDS, ishigami, ishigami_indices, quadrati
 NAMES = ["x1", "x2", "x3"]
 
 
+@pytest.mark.slow
 def test_gaussian_process_sobol_indices_of_ishigami_from_200_lhs_runs():
     U = qmc.LatinHypercube(d=3, seed=4).random(200)
     X = pd.DataFrame(-np.pi + 2 * np.pi * U, columns=NAMES)
@@ -43,6 +44,7 @@ def test_prediction_interval_coverage_matches_its_level():
     assert set(v["vif"]) == {"a", "b"}
 
 
+@pytest.mark.slow
 def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
     """The GP's leave-one-out predictions (R&W Eq. 5.12) against n independent fits with the
     same fitted kernel, leaving each point out (targets normalised as in the full fit)."""
@@ -67,6 +69,7 @@ def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
                                rel=1e-9)
 
 
+@pytest.mark.slow
 def test_random_forest_out_of_bag_q2_is_close_to_refit_leave_one_out():
     """Out-of-bag predictions stand in for n refits: each run is predicted by the ~37 % of
     trees that never saw it, as in leave-one-out (with fewer trees, hence the tolerance)."""

@@ -17,6 +17,8 @@ from sensfw.plugins import effects
 from sensfw.runs import Runner, RunStore
 from sensfw.study import Study
 
+pytestmark = pytest.mark.slow  # calibrations with many shaft simulations
+
 ROOT = Path(__file__).resolve().parents[2]
 NOISE = 0.02  # noise std as a fraction of each channel's RMS
 EFFECTS = ["friction", "contact_hardening", "preload", "added_mass", "flexible_mode",
