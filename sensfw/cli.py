@@ -2,6 +2,9 @@
 
 User errors (study file, measurement file, plugin name, a stage that cannot be analysed) are
 printed without a traceback and exit with status 2.
+
+Over 400 lines because it is flat: one typer function per command (their options and the
+printing of their results); the work of every command is in the library.
 """
 
 from __future__ import annotations

@@ -22,6 +22,10 @@ Example (``studies/quick.toml``)::
     design = "oat"
     scorers = [{ name = "frf_scalar" }]
     select = { by = "frf_scalar", threshold = 0.1, max_variables = 3 }
+
+Over 400 lines because the file schema (pydantic models) and its resolution against the
+model (units, bounds, groups, excitation, solver) belong together; the checks of the stages
+and their plugins are in :mod:`sensfw.study_checks`.
 """
 
 from __future__ import annotations
