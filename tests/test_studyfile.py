@@ -66,3 +66,41 @@ def test_non_ascii_strings_round_trip():
     for s in ("😀", "é ü ß", 'quote " and \\ backslash', "tab\tnew\nline", "a\u2028b"):
         out = add_effect(QUICK, "flexible_mode", "crankshaft", {}, s)
         assert tomllib.loads(out)["study"]["description"] == s
+
+
+def test_augment_command_writes_the_users_file_with_the_effect(tmp_path, monkeypatch):
+    """The command's glue (calibration replaced by a stub: it is tested in
+    tests/measure): study.toml in the output folder is the user's file plus the effect."""
+    from types import SimpleNamespace
+
+    from typer.testing import CliRunner
+
+    import sensfw.measure.diagnose
+    import sensfw.measure.session
+    import sensfw.report.measure
+    from sensfw.cli import app
+
+    params = {k: v["nominal"] for k, v in calibrated("flexible_mode", 1.2).items()}
+    monkeypatch.setattr(sensfw.measure.session, "load_measurements",
+                        lambda study, files: [SimpleNamespace(file=f) for f in files])
+    monkeypatch.setattr(sensfw.measure.diagnose, "augment",
+                        lambda *a, **k: {"attach": "crankshaft", "params": params,
+                                         "trajectory": [{"step": "calibrated", "error": 1.0}]})
+    monkeypatch.setattr(sensfw.report.measure, "write_augment_report", lambda *a, **k: None)
+    study = tmp_path / "mine.toml"
+    study.write_text("# my study 😀\n" + QUICK, encoding="utf-8")
+    out = tmp_path / "aug"
+    res = CliRunner().invoke(app, ["augment", str(study), "-m", "m.csv", "--effect",
+                                   "flexible_mode", "--out", str(out), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    text = (out / "study.toml").read_text(encoding="utf-8")
+    lines = iter(text.splitlines())  # every line of the user's file, in its order
+    assert all(any(new == old for new in lines) for old in ("# my study 😀\n" + QUICK)
+               .splitlines())
+    data = tomllib.loads(text)
+    assert data["model"]["options"]["effects"] == [{"name": "flexible_mode",
+                                                    "attach": "crankshaft"}]
+    assert data["parameters"]["flex_frequency"]["nominal"] == pytest.approx(
+        params["flex_frequency"])
+    assert "augmented with flexible_mode, calibrated against m.csv" in \
+        data["study"]["description"]
