@@ -2,6 +2,9 @@
 
 User errors (study file, measurement file, plugin name, a stage that cannot be analysed) are
 printed without a traceback and exit with status 2.
+
+Over 400 lines because it is flat: one typer function per command (their options and the
+printing of their results); the work of every command is in the library.
 """
 
 from __future__ import annotations
@@ -131,6 +134,7 @@ def run(
         out.print(f"at most {total} runs (+1 nominal reference); cached runs are not recomputed")
         return
     out_dir.mkdir(parents=True, exist_ok=True)
+    _keep_study_file(study_file, out_dir)
     runner = _runner(study, out_dir, workers, backend, scheduler, retry_failed, progress)
     t0 = time.perf_counter()
     try:
@@ -157,6 +161,32 @@ def run(
                 adj = "n/a" if v.get("r2_adj") is None else f"{v['r2_adj']:.3f}"
                 out.print(f"  {st['name']}: {label} / {name}: R2adj={adj} "
                           f"Q2(LOO)={v['q2_loo']:.3f}")
+
+
+def _keep_study_file(study_file: Path, out_dir: Path) -> None:
+    """Copy the study file into the output folder (``study.toml``), so that the folder
+    alone rebuilds its report (``sensfw report DIR``)."""
+    import shutil
+
+    target = out_dir / "study.toml"
+    if not target.exists() or not target.samefile(study_file):
+        shutil.copyfile(study_file, target)
+
+
+@app.command()
+@_user_errors
+def report(
+    out_dir: Annotated[Path, typer.Argument(help="output folder of `sensfw run`")],
+) -> None:
+    """Rebuild DIR/report.html from DIR/results.json, DIR/study.toml and the run store,
+    without simulating (analyses and surrogates are refitted to the stored scores)."""
+    from .pipeline import load_result
+    from .report.study import write_study_report
+
+    t0 = time.perf_counter()
+    result = load_result(out_dir)
+    path = write_study_report(result, out_dir / "report.html")
+    out.print(f"-> {path} ({time.perf_counter() - t0:.1f} s, no simulation)")
 
 
 @app.command()
@@ -377,14 +407,12 @@ def augment(
     progress: ShowProgress = True,
 ) -> None:
     """Add a physical effect, calibrate it, write the augmented study and the error path."""
-    import tomllib
-
     from .measure.diagnose import augment as run_augment
     from .measure.session import load_measurements
     from .plugins import effects
     from .report.measure import write_augment_report
     from .study import Study
-    from .tomlw import dumps
+    from .studyfile import add_effect
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
@@ -395,20 +423,15 @@ def augment(
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = run_augment(study, meas, runner, name, attach or None, start=start,
                              log=lambda s: console.print(f"[cyan]{s}"))
-    data = tomllib.loads(study_file.read_text())
-    model = data.setdefault("model", {})
-    opts = model.setdefault("options", {})
-    opts["effects"] = [*opts.get("effects", []), {"name": name, "attach": result["attach"]}]
-    params = data.setdefault("parameters", {})
     declared = {p.name: p for p in effects.get(name)().parameters()}
-    for k, v in result["params"].items():
-        p = declared[k]
-        params[k] = {"min": p.min, "nominal": float(v), "max": p.max}
-    data.setdefault("study", {})["description"] = (
-        data["study"].get("description", "") + f" [augmented with {name}, calibrated against "
-        f"{', '.join(m.file for m in meas)}]").strip()
+    calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
+                  for k, v in result["params"].items()}
+    note = (f"[augmented with {name}, calibrated against "
+            f"{', '.join(m.file for m in meas)}]")
+    text = add_effect(study_file.read_text(encoding="utf-8"), name, result["attach"],
+                      calibrated, note)
     out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "study.toml").write_text(dumps(data))
+    (out_dir / "study.toml").write_text(text, encoding="utf-8")
     Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
     _json(out_dir / "augment.json", result)
     write_augment_report(study, result, out_dir / "report.html")

@@ -33,14 +33,26 @@ class StudyError(SensfwError):
 class UnknownPluginError(SensfwError, KeyError):
     """A plugin name is not registered; the message lists the available names."""
 
-    def __init__(self, kind: str, name: str, available: Iterable[str]):
+    def __init__(self, kind: str, name: str, available: Iterable[str],
+                 reason: str | None = None):
         self.kind, self.name, self.available = kind, name, sorted(available)
+        why = f" ({reason})" if reason else ""
         super().__init__(
-            f"unknown {kind} {name!r}; available: {', '.join(self.available) or '(none)'}"
+            f"unknown {kind} {name!r}{why}; available: "
+            f"{', '.join(self.available) or '(none)'}"
         )
 
     def __str__(self) -> str:  # KeyError would quote the message
         return self.args[0]
+
+
+class OptionError(SensfwError, ValueError):
+    """A plugin (design, scorer, surrogate) got a bad option; ``option`` names it (None: the
+    options together), so a study can report it at its dotted path."""
+
+    def __init__(self, message: str, option: str | None = None):
+        super().__init__(message)
+        self.option = option
 
 
 class ParameterError(SensfwError, ValueError):

@@ -11,14 +11,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from .errors import AnalysisError, SensfwError
+from .evaluate import evaluate, make_scorers, needs_reference, reference_spec
 from .models.base import Signals
 from .params import DesignSpace
-from .runs import Runner, RunSpec
+from .runs import RunCounts, RunStore
 from .study import StageSpec, Study
 
 
@@ -47,9 +49,12 @@ class StageResult:
 
 @dataclass
 class StudyResult:
+    """A study's stages with the run store they read (``store``) and the run counts."""
+
     study: Study
     stages: list[StageResult]
-    runner: Runner
+    store: RunStore
+    counts: RunCounts
 
 
 def stage_variables(study: Study, stage: StageSpec, done: dict[str, StageResult]) -> list[str]:
@@ -62,51 +67,6 @@ def stage_variables(study: Study, stage: StageSpec, done: dict[str, StageResult]
     if not selected:
         raise AnalysisError(f"stage {stage.name!r}: stage {ref!r} selected no variables")
     return selected
-
-
-def make_specs(study: Study, space: DesignSpace, table: pd.DataFrame) -> list[RunSpec]:
-    specs = []
-    for _, row in table.iterrows():
-        params = space.to_parameters(row.to_dict())
-        specs.append(RunSpec.create(study.model, params, study.excitation, study.solver,
-                                    study.model_ref()))
-    return specs
-
-
-def reference_spec(study: Study) -> RunSpec:
-    """The nominal run (every parameter at its nominal value): the FRF reference H_v,0."""
-    return RunSpec.create(study.model, study.parameters.nominal(), study.excitation,
-                          study.solver, study.model_ref())
-
-
-def make_scorers(study: Study, stage: StageSpec) -> dict[str, object]:
-    from .scorers import make_scorer
-
-    out = {}
-    for sc in stage.scorers:
-        out[sc.key] = make_scorer(sc.name, channel=sc.channel or study.output, **sc.options())
-    return out
-
-
-def score_runs(scorers: dict[str, object], runner: Runner, keys: list[str],
-               labels: list[str], reference: Signals | None) -> tuple[pd.DataFrame, dict]:
-    """Score every run; failed runs give NaN rows and an entry in the failure dict."""
-    rows, failed = [], {}
-    for label, key in zip(labels, keys, strict=True):
-        res = runner.load(key)
-        row: dict[str, float] = {}
-        if res is None or not res.ok:
-            failed[label] = "missing from the store" if res is None else res.error
-        else:
-            for name, scorer in scorers.items():
-                values = scorer.score(res.signals, reference)
-                if len(values) == 1:
-                    row[name] = float(next(iter(values.values())))
-                else:
-                    row.update({f"{name}.{k}": float(v) for k, v in values.items()})
-        rows.append(row)
-    frame = pd.DataFrame(rows, index=labels)
-    return frame, failed
 
 
 def _select(stage: StageSpec, screening, scores: pd.DataFrame) -> list[str]:
@@ -169,23 +129,21 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                 continue
             result.surrogates[label][name] = est
             result.validation[label][name] = validate(est, X, y[ok], seed=study.spec.study.seed)
-            summary = getattr(est, "summary_", None)
-            if summary is not None and label not in result.regression:
-                coefs = getattr(est, "coefficients_physical_", None)
-                if coefs is None:
-                    coefs = est.coefficients_
+            if est.summary_ is not None and est.coefficient_table_ is not None \
+                    and label not in result.regression:
                 result.regression[label] = {
                     "surrogate": name,
                     "options": {k: v for k, v in opts.items() if k != "bounds"},
-                    **{k: summary.get(k) for k in ("r2", "r2_adj", "q2", "f_stat", "f_pvalue",
-                                                   "n_obs")},
-                    "coefficients": _jsonable(coefs[["term", "estimate", "se", "t", "p"]]),
+                    **{k: est.summary_.get(k) for k in ("r2", "r2_adj", "q2", "f_stat",
+                                                        "f_pvalue", "n_obs")},
+                    "coefficients": _jsonable(
+                        est.coefficient_table_[["term", "estimate", "se", "t", "p"]]),
                     "coefficients_coded": _jsonable(
-                        est.coefficients_[["term", "estimate", "se", "t", "p"]]),
+                        est.coefficient_table_coded_[["term", "estimate", "se", "t", "p"]]),
                 }
 
 
-def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner: Runner,
+def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner,
             result: StageResult, scorers: dict, reference: Signals | None) -> None:
     """Confirmation runs: new random points inside the bounds, simulated and compared with
     each surrogate's prediction (error and prediction-interval coverage)."""
@@ -197,12 +155,11 @@ def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner: Runner,
     sampler = qmc.LatinHypercube(d=len(space), seed=study.spec.study.seed + 7919)
     table = space.decode(2 * sampler.random(n) - 1)
     table.index = [f"confirm:{i:03d}" for i in range(n)]
-    specs = make_specs(study, space, table)
-    runner.run(specs, label=f"{stage.name} confirmation")
-    keys = [s.key() for s in specs]
-    scores, failed = score_runs(scorers, runner, keys, list(table.index), reference)
+    ev = evaluate(study, space, table, runner, scorers, reference,
+                  label=f"{stage.name} confirmation")
     for label, per in result.surrogates.items():
-        y = scores[label].to_numpy(dtype=float) if label in scores else np.full(n, np.nan)
+        y = ev.scores[label].to_numpy(dtype=float) if label in ev.scores \
+            else np.full(n, np.nan)
         ok = np.isfinite(y)
         for name, est in per.items():
             try:
@@ -210,34 +167,27 @@ def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner: Runner,
                     est, table.loc[ok, space.names], y[ok])
             except SensfwError as err:
                 result.validation[label][name]["confirmation"] = {"error": str(err)}
-    if failed:
-        result.notes.append(f"{len(failed)} confirmation run(s) failed")
+    if ev.failed:
+        result.notes.append(f"{len(ev.failed)} confirmation run(s) failed")
 
 
-def run_stage(study: Study, stage: StageSpec, runner: Runner,
-              done: dict[str, StageResult]) -> StageResult:
+def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResult],
+              known: dict | None = None) -> StageResult:
+    """One stage: :func:`~sensfw.evaluate.evaluate` its design, then the design's analysis
+    (screening and selection) or the surrogates (+ confirmation runs). ``runner`` is a
+    :class:`~sensfw.runs.Runner` or a :class:`~sensfw.runs.StoredRuns`; ``known`` holds
+    scores by run key from an earlier ``results.json``."""
     from .designs import make_design
 
     variables = stage_variables(study, stage, done)
     space = study.space(stage, variables)
     design = make_design(stage.design, **stage.design_options)
-    table = design.generate(space, seed=study.spec.study.seed)
-    specs = make_specs(study, space, table)
     scorers = make_scorers(study, stage)
-    needs_ref = any(getattr(s, "needs_reference", False) for s in scorers.values())
-    ref = reference_spec(study) if needs_ref else None
-    runner.run(specs + ([ref] if ref else []), label=stage.name)
-    reference = None
-    if ref is not None:
-        res = runner.load(ref.key())
-        if res is None or not res.ok:
-            raise AnalysisError(f"stage {stage.name!r}: the nominal reference run failed "
-                                f"({res.error if res else 'missing'}); FRF-based scores need it")
-        reference = res.signals
-    keys = [s.key() for s in specs]
-    scores, failed = score_runs(scorers, runner, keys, list(table.index), reference)
-    result = StageResult(spec=stage, space=space, table=table, keys=keys, scores=scores,
-                         reference_key=ref.key() if ref else None, failed=failed)
+    ref = reference_spec(study) if needs_reference(scorers) else None
+    ev = evaluate(study, space, design, runner, scorers, ref, label=stage.name, known=known)
+    table, scores, failed = ev.table, ev.scores, ev.failed
+    result = StageResult(spec=stage, space=space, table=table, keys=ev.keys, scores=scores,
+                         reference_key=ev.reference_key, failed=failed)
     if failed:
         result.notes.append(f"{len(failed)} of {len(table)} runs failed and were left out: "
                             + "; ".join(f"{k}: {v.splitlines()[0] if v else v}"
@@ -245,7 +195,7 @@ def run_stage(study: Study, stage: StageSpec, runner: Runner,
     if stage.select is not None:
         by = stage.select.by or stage.scorers[0].key
         result.screening = design.analyze(space, table, scores[by].to_numpy(dtype=float))
-        result.notes.extend(getattr(result.screening, "notes", []))
+        result.notes.extend(result.screening.notes)
         result.selected = _select(stage, result.screening, scores)
     elif not stage.surrogates:
         by = stage.scorers[0].key
@@ -256,22 +206,54 @@ def run_stage(study: Study, stage: StageSpec, runner: Runner,
     if stage.surrogates:
         fit_surrogates(study, stage, space, table, scores, result)
         if stage.confirmation_runs:
-            confirm(study, stage, space, runner, result, scorers, reference)
+            confirm(study, stage, space, runner, result, scorers, ev.reference)
     return result
 
 
-def run_study(study: Study, runner: Runner,
-              log: Callable[[str], None] = lambda s: None) -> StudyResult:
+def run_study(study: Study, runner, log: Callable[[str], None] = lambda s: None,
+              known: dict | None = None) -> StudyResult:
+    """Every stage in order; ``runner`` a :class:`~sensfw.runs.Runner` (or
+    :class:`~sensfw.runs.StoredRuns` to rebuild without simulating)."""
     done: dict[str, StageResult] = {}
     stages = []
     for stage in study.stages:
         log(f"stage {stage.name}: design {stage.design}")
-        res = run_stage(study, stage, runner, done)
+        res = run_stage(study, stage, runner, done, known)
         done[stage.name] = res
         stages.append(res)
         if res.selected is not None:
             log(f"stage {stage.name}: selected {', '.join(res.selected) or '(none)'}")
-    return StudyResult(study=study, stages=stages, runner=runner)
+    return StudyResult(study=study, stages=stages, store=runner.store, counts=runner.counts)
+
+
+def load_result(out_dir: str | Path) -> StudyResult:
+    """The :class:`StudyResult` of a finished study, rebuilt from its output folder without
+    simulating: the study file copied there (``study.toml``, else the path recorded in
+    ``results.json``), the run store ``runs/`` and the scores in ``results.json``. Designs
+    are regenerated (deterministic for the study's seed), analyses and surrogates refitted
+    to the stored scores; confirmation runs are scored from the store."""
+    import json
+
+    from .runs import StoredRuns
+
+    out = Path(out_dir)
+    path = out / "results.json"
+    try:
+        data = json.loads(path.read_text())
+        stages = data["stages"]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise SensfwError(f"{path}: not a readable results.json ({err})") from None
+    study_file = out / "study.toml"
+    if not study_file.exists():
+        study_file = Path(data.get("study_file") or study_file)
+    study = Study.load(study_file)
+    known: dict[str, dict] = {}
+    for st in stages:
+        for r in st.get("runs", []):
+            known[r["key"]] = {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
+                               if r["label"] in v}
+    runs = StoredRuns(RunStore(out / "runs"), RunCounts(**data.get("runs", {})))
+    return run_study(study, runs, known=known)
 
 
 def plan(study: Study) -> list[dict]:
@@ -306,9 +288,9 @@ def plan(study: Study) -> list[dict]:
     return out
 
 
-def run_step(runner: Runner, key: str) -> dict:
+def run_step(store: RunStore, key: str) -> dict:
     """The time step a stored run used and what set it (``{}`` for models without one)."""
-    rec = runner.store.record(key) or {}
+    rec = store.record(key) or {}
     return {k: rec[k] for k in ("step", "step_limited_by") if k in rec}
 
 
@@ -321,11 +303,13 @@ def results_json(res: StudyResult) -> dict:
             "variables": st.space.names,
             "runs": [{"label": lab, "key": key, **{v: float(st.table.loc[lab, v])
                                                     for v in st.space.names},
-                      **run_step(res.runner, key)}
+                      **run_step(res.store, key)}
                      for lab, key in zip(st.table.index, st.keys, strict=True)],
             "failed": st.failed,
             "scores": {c: st.scores[c].to_dict() for c in st.scores.columns},
         }
+        if st.reference_key is not None:
+            entry["reference_key"] = st.reference_key
         if st.screening is not None:
             entry["importance"] = st.screening.importance.to_dict()
             entry["analysis"] = _jsonable(st.screening.table.reset_index())
@@ -339,5 +323,6 @@ def results_json(res: StudyResult) -> dict:
         if st.notes:
             entry["notes"] = st.notes
         stages.append(entry)
-    return _jsonable({"study": res.study.name, "runs": res.runner.counts.as_dict(),
-                      "stages": stages})
+    source = str(Path(res.study.source).resolve()) if res.study.source else None
+    return _jsonable({"study": res.study.name, "study_file": source,
+                      "runs": res.counts.as_dict(), "stages": stages})

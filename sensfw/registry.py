@@ -6,6 +6,11 @@ Built-ins register with the :meth:`Registry.register` decorator in the modules n
 declare an entry point in the registry's group (``sensfw.designs`` ...); entry points load
 lazily on the first lookup that misses, and one that fails to load is a warning, not a crash
 (as xarray does for its backends).
+
+A name of the form ``"package.module:Class"`` (the form of an entry point's value) is imported
+on first use and registered under that name, so a plugin in any importable module works
+without packaging, also in worker processes (which import it again by the same name); the
+test suite's fault-injection model is used this way.
 """
 
 from __future__ import annotations
@@ -65,11 +70,26 @@ class Registry(Generic[T]):
                     stacklevel=2,
                 )
 
+    def _load_reference(self, name: str) -> None:
+        """Import ``"module:attr"`` and register it under that name."""
+        module, _, attr = name.partition(":")
+        try:
+            obj = importlib.import_module(module.strip())
+            for part in attr.strip().split("."):
+                obj = getattr(obj, part)
+        except Exception as err:  # ImportError, AttributeError, or the module's own error
+            raise UnknownPluginError(self.kind, name, self.names(),
+                                     reason=f"cannot import {name!r} ({err})") from None
+        self.add(name, obj, origin=f"module {module.strip()}")
+
     def get(self, name: str) -> T:
-        """The plugin registered as ``name``; :class:`UnknownPluginError` lists the others."""
+        """The plugin registered as ``name`` (or importable as ``"module:attr"``);
+        :class:`UnknownPluginError` lists the others."""
         self._load_builtins()
         if name not in self._items:
             self._load_entry_points()
+        if name not in self._items and ":" in name:
+            self._load_reference(name)
         if name not in self._items:
             raise UnknownPluginError(self.kind, name, self.names())
         return self._items[name]

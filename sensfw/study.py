@@ -22,6 +22,10 @@ Example (``studies/quick.toml``)::
     design = "oat"
     scorers = [{ name = "frf_scalar" }]
     select = { by = "frf_scalar", threshold = 0.1, max_variables = 3 }
+
+Over 400 lines because the file schema (pydantic models) and its resolution against the
+model (units, bounds, groups, excitation, solver) belong together; the checks of the stages
+and their plugins are in :mod:`sensfw.study_checks`.
 """
 
 from __future__ import annotations
@@ -283,7 +287,7 @@ class Study:
     def load(cls, path: str | Path) -> Study:
         path = Path(path)
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise StudyError([("", "file not found")], str(path)) from None
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
@@ -468,64 +472,11 @@ class Study:
         return DesignSpace.from_parameters(self.parameters, self.groups).names
 
     def _check_stages(self, problems) -> None:
-        from .plugins import designs, scorers, surrogates
+        """Stages, with every design, scorer and surrogate built with its options
+        (:mod:`sensfw.study_checks`)."""
+        from .study_checks import check_stages
 
-        names = [s.name for s in self.spec.stages]
-        all_vars = set(self.variable_names())
-        for i, st in enumerate(self.spec.stages):
-            where = f"stages[{i}]"
-            if names.count(st.name) > 1:
-                problems.append((f"{where}.name", f"duplicate stage name {st.name!r}"))
-            try:
-                designs.get(st.design)
-            except UnknownPluginError as err:
-                problems.append((f"{where}.design", str(err)))
-            labels = []
-            for j, sc in enumerate(st.scorers):
-                try:
-                    scorers.get(sc.name)
-                except UnknownPluginError as err:
-                    problems.append((f"{where}.scorers[{j}].name", str(err)))
-                if sc.channel is not None and self.model is not None and \
-                        sc.channel not in (*self.model.sensors, "force"):
-                    problems.append((f"{where}.scorers[{j}].channel",
-                                     f"unknown channel {sc.channel!r}; the model has "
-                                     f"{', '.join(self.model.sensors)}"))
-                if sc.key in labels:
-                    problems.append((f"{where}.scorers[{j}].label",
-                                     f"duplicate scorer label {sc.key!r}"))
-                labels.append(sc.key)
-            seen_sur = []
-            for j, sur in enumerate(st.surrogates):
-                try:
-                    surrogates.get(sur.name)
-                except UnknownPluginError as err:
-                    problems.append((f"{where}.surrogates[{j}]", str(err)))
-                if sur.key in seen_sur:
-                    problems.append((f"{where}.surrogates[{j}].label",
-                                     f"duplicate surrogate label {sur.key!r}"))
-                seen_sur.append(sur.key)
-            if st.select is not None and st.select.by is not None and st.select.by not in labels:
-                problems.append((f"{where}.select.by", f"no scorer labelled {st.select.by!r} "
-                                                       f"in this stage ({', '.join(labels)})"))
-            if isinstance(st.variables, str) and st.variables.startswith("selected:"):
-                ref = st.variables.split(":", 1)[1]
-                if ref not in names[:i]:
-                    problems.append((f"{where}.variables",
-                                     f"no earlier stage named {ref!r}"))
-                elif self.spec.stages[names.index(ref)].select is None:
-                    problems.append((f"{where}.variables",
-                                     f"stage {ref!r} has no [select] to take variables from"))
-            elif isinstance(st.variables, list):
-                for v in st.variables:
-                    if all_vars and v not in all_vars:
-                        problems.append((f"{where}.variables",
-                                         f"unknown design variable {v!r}; known: "
-                                         f"{', '.join(sorted(all_vars))}"))
-            if self.parameters is not None:
-                changes, _ = self._overrides(st.bounds, self.parameters, f"{where}.bounds",
-                                             problems)
-                self.stage_bounds[st.name] = changes
+        check_stages(self, problems)
 
     def _check_calibration(self, problems) -> dict:
         cal = self.spec.calibration

@@ -1,4 +1,11 @@
-"""Shared fixtures: the quick study is run once per test session and reused."""
+"""Shared fixtures: the quick study is run once per test session and reused.
+
+Test-only models (fault injection, a noisy quadratic) live in ``tests/support`` and are named
+``"sensfw_test_models:FaultInjection"`` etc. in studies and run specs. That folder is put on
+``sys.path`` here and on ``PYTHONPATH`` for every process the tests start (``python -m sensfw``
+subprocesses, forkserver and spawned workers, Dask workers and their run subprocesses), so each
+of them imports the module by that name (see ``tests/support/sensfw_test_models.py``).
+"""
 
 import os
 import subprocess
@@ -12,6 +19,12 @@ ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "studies" / "quick.toml"
 # real measurements (never copied into the repository): $SENSFW_BERT_DATA or ../shared/data/bert
 BERT = Path(os.environ.get("SENSFW_BERT_DATA") or ROOT / ".." / "shared" / "data" / "bert")
+SUPPORT = ROOT / "tests" / "support"
+
+if str(SUPPORT) not in sys.path:
+    sys.path.insert(0, str(SUPPORT))
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    [str(SUPPORT), *filter(None, [os.environ.get("PYTHONPATH")])])
 
 
 def run_cli(*args, timeout=300):

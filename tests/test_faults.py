@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 import pytest
+from sensfw_test_models import FAULT_INJECTION
 
 from sensfw.excitation import Chirp
 from sensfw.models.base import SolverSettings
@@ -28,6 +29,7 @@ def cluster():
         yield c
 
 
+@pytest.mark.slow
 def test_dask_backend_gives_identical_results(quick, cli, cluster, tmp_path):
     ref, _ = quick
     proc = cli("run", QUICK, "--out", tmp_path, "--scheduler", cluster.scheduler_address,
@@ -39,14 +41,15 @@ def test_dask_backend_gives_identical_results(quick, cli, cluster, tmp_path):
     assert got["stages"] == want["stages"]
 
 
+@pytest.mark.slow
 def test_killed_dask_worker_loses_and_duplicates_nothing(cluster, tmp_path):
     from distributed import Client
 
     opts = {"model": "two_dof", "slow_seconds": 0.4}
-    m = models.get("fault_injection")(**opts)
+    m = models.get(FAULT_INJECTION)(**opts)
     ex = Chirp(50, 500, 0.05, 4000, 1.0)
     specs = [RunSpec.create(m, m.parameters().complete({"k1": 2000.0 + 100 * i}), ex,
-                            SolverSettings(), {"name": "fault_injection", "options": opts})
+                            SolverSettings(), {"name": FAULT_INJECTION, "options": opts})
              for i in range(12)]
     with Client(cluster) as client:
         pids = client.run(os.getpid)
@@ -75,7 +78,7 @@ STUDY = """
 [study]
 name = "refuse"
 [model]
-name = "fault_injection"
+name = "sensfw_test_models:FaultInjection"
 options = {{ model = "two_dof", diverge = {{ parameter = "k1", above = {above}, below = 2500.0 }} }}
 output = "a1"
 [excitation]

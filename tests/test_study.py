@@ -130,3 +130,66 @@ def test_dry_run_prints_the_plan_without_running(tmp_path):
     assert "39" in proc.stdout and "81" in proc.stdout  # 2 x 19 + 1 and 3^4
     assert "at most 120 runs" in proc.stdout
     assert not (tmp_path / "o").exists()
+
+
+def test_plugin_options_are_checked_before_anything_runs():
+    """Every design, scorer and surrogate is built with its options when the study loads;
+    each bad option is reported at its dotted path, all at once (issue 12, item 2)."""
+    data = copy.deepcopy(QUICK)
+    data["stages"][1]["design_options"] = {"levelz": 3}
+    data["stages"][0]["scorers"][0]["band"] = [5000.0, 50.0]
+    data["stages"][1]["scorers"][2]["unit"] = "dB"
+    data["stages"][1]["surrogates"] = [{"name": "eq18", "interaction": "bogus"},
+                                       {"name": "gaussian_process", "noise": "yes",
+                                        "n_restarts_optimizer": -1}]
+    got = problems(data)
+    assert got["stages[1].design_options.levelz"] == "unknown option; known: levels"
+    assert "fmin < fmax" in got["stages[0].scorers[0].band"]
+    assert "unit must be 'percent' or 'dBc'" in got["stages[1].scorers[2].unit"]
+    assert "'product'" in got["stages[1].surrogates[0].interaction"]
+    assert "'bogus'" in got["stages[1].surrogates[0].interaction"]
+    assert "bool" in got["stages[1].surrogates[1].noise"]
+    assert "range [0, inf)" in got["stages[1].surrogates[1].n_restarts_optimizer"]
+    assert len(got) == 6
+
+
+@pytest.mark.parametrize("band, why", [
+    ([20.0, 5000.0], "not inside the excitation's sweep f0..f1 = [50, 5000] Hz"),
+    ([50.0, 6000.0], "not inside the excitation's sweep"),
+    ([50.0, 12000.0], "above the Nyquist frequency 10000 Hz"),
+])
+def test_a_scorer_band_is_checked_against_the_excitation(band, why):
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["scorers"][0]["band"] = band
+    assert why in problems(data)["stages[0].scorers[0].band"]
+
+
+def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space():
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["design"] = "morris"
+    data["stages"][0]["design_options"] = {"trajectories": 3, "optimal_trajectories": 5}
+    data["stages"][1]["surrogates"] = [{"name": "eq18", "interaction": "ratio"}]
+    got = problems(data)
+    assert "optimal_trajectories must be an integer in [2, trajectories)" in \
+        got["stages[0].design_options"]
+    assert "coding='physical'" in got["stages[1].surrogates[0].interaction"]
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["design"] = "box_behnken"
+    data["stages"][0]["variables"] = ["slide_stiffness", "slide_damping"]
+    assert "needs at least 3 variables, got 2" in problems(data)["stages[0].design"]
+
+
+def test_cli_validate_reports_bad_options(tmp_path):
+    bad = tmp_path / "bad.toml"
+    text = (ROOT / "studies" / "quick.toml").read_text()
+    bad.write_text(text.replace("design_options = { levels = 3 }",
+                                "design_options = { levelz = 3 }")
+                   .replace('surrogates = ["eq18"]',
+                            'surrogates = [{ name = "eq18", interaction = "bogus" }]'))
+    proc = subprocess.run([sys.executable, "-m", "sensfw", "validate", str(bad)],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "COLUMNS": "200"})
+    assert proc.returncode == 2
+    assert "stages[1].design_options.levelz: unknown option; known: levels" in proc.stderr
+    assert "stages[1].surrogates[0].interaction" in proc.stderr
+    assert "Traceback" not in proc.stderr

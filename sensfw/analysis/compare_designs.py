@@ -10,7 +10,6 @@ top-k variables and Kendall's tau between importance vectors.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 
 import numpy as np
@@ -30,28 +29,14 @@ def _simulation_seconds(runner: Runner, keys: Sequence[str]) -> float:
     return total
 
 
-def _run_design(study, stage, space, runner, name, options, scorers, reference):
-    from ..designs import make_design
-    from ..pipeline import make_specs, score_runs
-
-    design = make_design(name, **options)
-    table = design.generate(space, seed=study.spec.study.seed)
-    specs = make_specs(study, space, table)
-    t0 = time.perf_counter()
-    runner.run(specs, label=name)
-    wall = time.perf_counter() - t0
-    keys = [s.key() for s in specs]
-    scores, failed = score_runs(scorers, runner, keys, list(table.index), reference)
-    return design, table, keys, scores, failed, wall
-
-
 def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
                     options: dict[str, dict] | None = None, reference_runs: int | None = None,
                     reference_surrogate: str = "gaussian_process", top_k: int | None = None,
                     log=lambda s: None) -> dict:
     from ..analysis.sobol import sobol_indices
     from ..analysis.validation import validate
-    from ..pipeline import make_scorers, reference_spec, stage_variables
+    from ..evaluate import evaluate, make_scorers, needs_reference, reference_spec
+    from ..pipeline import stage_variables
     from ..surrogates import make_surrogate
 
     options = options or {}
@@ -64,7 +49,7 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
     top_k = top_k or (stage.select.max_variables if stage.select and
                       stage.select.max_variables else min(4, k))
     reference = None
-    if any(getattr(s, "needs_reference", False) for s in scorers.values()):
+    if needs_reference(scorers):
         ref = reference_spec(study)
         runner.run([ref], label="reference run")
         res = runner.load(ref.key())
@@ -75,9 +60,10 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
     # the reference ranking: Sobol' total indices of a surrogate on a large LHS
     n_ref = reference_runs or 10 * k
     log(f"reference: lhs with {n_ref} runs + {reference_surrogate}")
-    _, table, keys, scores, failed, _ = _run_design(
-        study, stage, space, runner, "lhs", {"samples": n_ref}, scorers, reference)
-    y = scores[label].to_numpy(float)
+    ev = evaluate(study, space, "lhs", runner, scorers, reference, options={"samples": n_ref},
+                  label="reference lhs")
+    table, keys, failed = ev.table, ev.keys, ev.failed
+    y = ev.scores[label].to_numpy(float)
     ok = np.isfinite(y)
     bounds = [(v.low, v.high) for v in space.variables]
     opts = {"bounds": bounds}
@@ -99,9 +85,10 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
     rows = []
     for name in designs:
         log(f"design {name}")
-        design, table, keys, scores, failed, wall = _run_design(
-            study, stage, space, runner, name, options.get(name, {}), scorers, reference)
-        res = design.analyze(space, table, scores[label].to_numpy(float))
+        ev = evaluate(study, space, name, runner, scorers, reference,
+                      options=options.get(name, {}), label=name)
+        table, keys, failed, wall = ev.table, ev.keys, ev.failed, ev.wall
+        res = ev.design.analyze(space, table, ev.scores[label].to_numpy(float))
         imp = res.importance.reindex(space.names).fillna(0.0)
         rank = list(imp.sort_values(ascending=False, kind="stable").index)
         overlap = len(set(rank[:top_k]) & set(ref_rank[:top_k])) / top_k

@@ -50,7 +50,9 @@ def vif(X) -> dict[str, float]:
 
 
 def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
-    """Quality of a fitted ``estimator`` on its training data ``X, y`` (JSON-serialisable)."""
+    """Quality of a fitted ``estimator`` (a :class:`~sensfw.surrogates.Surrogate`) on its
+    training data ``X, y`` (JSON-serialisable). Leave-one-out Q^2 comes from its
+    ``summary_`` (Eq. 18's hat matrix), else its ``loo_predict()``, else n refits."""
     Xa, ya = _arrays(X, y)
     n = len(ya)
     if n < 3:
@@ -58,10 +60,10 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
     fitted = np.asarray(estimator.predict(X), float)
     resid = ya - fitted
     ss = float(np.sum((ya - ya.mean()) ** 2))
-    summary = getattr(estimator, "summary_", {}) or {}
+    summary = estimator.summary_ or {}
     r2 = float(1 - np.sum(resid**2) / ss) if ss > 0 else float("nan")
     # statistics on the scale of y (a surrogate may fit a transformed response)
-    same_scale = not getattr(estimator, "log_response", False)
+    same_scale = summary.get("response", "y") == "y"
     p = summary.get("n_terms")
     out = {
         "n_obs": n,
@@ -76,11 +78,12 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
         "residuals": resid.tolist(),
     }
     out["q2_loo_method"] = "hat matrix" if out["q2_loo"] is not None else None
-    if out["q2_loo"] is None and same_scale and hasattr(estimator, "loo_predict"):
-        loo = np.asarray(estimator.loo_predict(), float)  # without refits: GP, forest
+    loo = estimator.loo_predict() if out["q2_loo"] is None else None  # without refits
+    if loo is not None:
+        loo = np.asarray(loo, float)
         if np.all(np.isfinite(loo)) and ss > 0:
             out["q2_loo"] = float(1 - np.sum((ya - loo) ** 2) / ss)
-            out["q2_loo_method"] = getattr(estimator, "loo_method", "loo_predict")
+            out["q2_loo_method"] = estimator.loo_method
     if out["q2_loo"] is None:
         out["q2_loo"] = q2_cv(estimator, X, ya, KFold(n_splits=n))
         out["q2_loo_method"] = f"{n} refits"
@@ -98,7 +101,7 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
 
 def confirmation(estimator, X_new, y_new, alpha: float = 0.05) -> dict:
     """Prediction error at new points, and the coverage of (1 - alpha) prediction intervals
-    where the estimator provides them (``predict_interval``)."""
+    where the estimator provides them (``predict_interval`` not None)."""
     _, ya = _arrays(X_new, y_new)
     if len(ya) == 0:
         raise AnalysisError("no confirmation runs finished")
@@ -109,7 +112,8 @@ def confirmation(estimator, X_new, y_new, alpha: float = 0.05) -> dict:
            "max_abs_error": float(np.max(np.abs(err))),
            "r2": float(1 - np.sum(err**2) / ss) if ss > 0 else float("nan"),
            "level": 1 - alpha, "coverage": None}
-    if hasattr(estimator, "predict_interval"):
-        lo, hi = estimator.predict_interval(X_new, alpha=alpha)
+    interval = estimator.predict_interval(X_new, alpha=alpha)
+    if interval is not None:
+        lo, hi = interval
         out["coverage"] = float(np.mean((ya >= lo) & (ya <= hi)))
     return out

@@ -10,12 +10,13 @@ from typing import Any, ClassVar
 import numpy as np
 import pandas as pd
 
-from ..errors import AnalysisError, SensfwError
+from ..errors import AnalysisError, OptionError
 from ..params import DesignSpace
 
 
-class DesignError(SensfwError, ValueError):
-    """A design was given a bad option or cannot be built for the space."""
+class DesignError(OptionError):
+    """A design was given a bad option (``option`` names it, where known) or cannot be built
+    for the space."""
 
 
 @dataclass
@@ -58,7 +59,8 @@ class Design(ABC):
         if unknown:
             raise DesignError(f"design {self.name!r}: unknown option(s) "
                               f"{', '.join(sorted(unknown))}; accepted: "
-                              f"{', '.join(sorted(self.defaults)) or '(none)'}")
+                              f"{', '.join(sorted(self.defaults)) or '(none)'}",
+                              option=sorted(unknown)[0])
         self.options = {**self.defaults, **options}
         self.validate()
 

@@ -6,24 +6,22 @@
 * ``two_dof``: a linear 2-DOF mass-spring-damper driven by the chirp on mass 1, simulated
   exactly (zero-order-hold discretisation of the state space); channels ``a1``, ``a2``
   (accelerations). Its FRF and eigenfrequencies are known in closed form.
-* ``fault_injection``: wraps another model and makes chosen runs fail, diverge, hang or kill
-  their worker, so the run store, executors and analyses can be tested against faults.
+
+The test suite's fault-injection and noisy-quadratic models are not shipped here: they live in
+``tests/support/sensfw_test_models.py`` and are used by their ``"module:Class"`` name.
 """
 
 from __future__ import annotations
 
 import math
-import os
-import time
 from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import DivergenceError
 from ..excitation import Chirp
 from ..params import Parameter, ParameterSet
 from ..plugins import models
-from .base import Model, Signals, SolverSettings
+from .base import Model, Signals
 
 
 def scalar_signals(values: Mapping[str, float]) -> Signals:
@@ -111,91 +109,3 @@ class TwoDOF(Model):
         return Signals(t=t, force=force, channels={"a1": acc[:, 0], "a2": acc[:, 1]},
                        fs=excitation.fs, f_inst=excitation.f_inst(t),
                        sweep_end=excitation.duration)
-
-
-@models.register("fault_injection")
-class FaultInjection(Model):
-    """Another model with injected faults, for testing fault tolerance.
-
-    Options map a fault to a condition ``{"parameter": name, "above": value}`` (or
-    ``"below"``, or both: outside the interval): ``diverge``
-    raises the model's divergence error, ``hang`` sleeps ``hang_seconds``, ``crash`` kills
-    the worker process (``os._exit``). ``slow`` adds ``slow_seconds`` to every run.
-    """
-
-    name = "fault_injection"
-    version = "1"
-
-    def __init__(self, model: str = "ishigami", model_options: dict | None = None,
-                 diverge: dict | None = None, hang: dict | None = None,
-                 crash: dict | None = None, hang_seconds: float = 3600.0,
-                 slow_seconds: float = 0.0):
-        self.inner = models.get(model)(**(model_options or {}))
-        self.sensors, self.default_output = self.inner.sensors, self.inner.default_output
-        self.faults = {"diverge": diverge, "hang": hang, "crash": crash}
-        self.hang_seconds, self.slow_seconds = float(hang_seconds), float(slow_seconds)
-        self._spec = {"model": model, "model_options": model_options or {},
-                      **{k: v for k, v in self.faults.items() if v},
-                      "hang_seconds": hang_seconds, "slow_seconds": slow_seconds}
-
-    def parameters(self) -> ParameterSet:
-        return self.inner.parameters()
-
-    def groups(self):
-        return self.inner.groups()
-
-    def options(self) -> dict:
-        return self._spec
-
-    def _hit(self, fault: str, p: Mapping[str, float]) -> bool:
-        cond = self.faults[fault]
-        if not cond:
-            return False
-        v = p[cond["parameter"]]
-        return v > cond.get("above", math.inf) or v < cond.get("below", -math.inf)
-
-    def simulate(self, params, excitation: Chirp, solver: SolverSettings | None = None):
-        p = self.parameters().complete(params)
-        if self.slow_seconds:
-            time.sleep(self.slow_seconds)
-        if self._hit("crash", p):
-            os._exit(13)
-        if self._hit("hang", p):
-            time.sleep(self.hang_seconds)
-        if self._hit("diverge", p):
-            raise DivergenceError(self.name, "diverged (injected fault)", p)
-        return self.inner.simulate(p, excitation, solver)
-
-
-@models.register("noisy_quadratic")
-class NoisyQuadratic(Model):
-    """``y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3 + noise`` on [-1, 1]^3 with Gaussian noise
-    of standard deviation ``noise``, drawn from a generator seeded by the parameter values
-    (the same run gives the same value: runs stay cacheable). A test model for regression
-    validation: Eq. 18 is the true model, so its prediction intervals must cover at their
-    nominal level."""
-
-    name = "noisy_quadratic"
-    version = "1"
-    sensors = ("y",)
-    default_output = "y"
-
-    def __init__(self, noise: float = 0.2):
-        self.noise = float(noise)
-
-    def parameters(self) -> ParameterSet:
-        return ParameterSet([Parameter(f"x{i}", "", 0.0, -1.0, 1.0) for i in (1, 2, 3)])
-
-    def options(self) -> dict:
-        return {"noise": self.noise}
-
-    def simulate(self, params, excitation=None, solver=None) -> Signals:
-        import hashlib
-
-        p = self.parameters().complete(params)
-        x1, x2, x3 = p["x1"], p["x2"], p["x3"]
-        seed = int.from_bytes(hashlib.sha256(repr((x1, x2, x3)).encode()).digest()[:8],
-                              "little")
-        eps = np.random.default_rng(seed).standard_normal()
-        y = 1 + x1 - 2 * x2 + 1.5 * x1**2 + 0.5 * x1 * x3 + self.noise * eps
-        return scalar_signals({"y": y})

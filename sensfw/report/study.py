@@ -1,4 +1,8 @@
-"""The study report: the figures a reader of the paper expects (Figs. 7-11) per stage."""
+"""The study report: the figures a reader of the paper expects (Figs. 7-11) per stage.
+
+It reads a :class:`~sensfw.pipeline.StudyResult`: the stages and the run store, never a
+runner, so a report can be rebuilt from an output folder (``sensfw report DIR``,
+:func:`~sensfw.pipeline.load_result`)."""
 
 from __future__ import annotations
 
@@ -12,7 +16,7 @@ from .html import Page
 
 
 def _signals(result, key):
-    res = result.runner.load(key)
+    res = result.store.load(key)
     return res.signals if res is not None and res.ok else None
 
 
@@ -205,7 +209,7 @@ def _step_note(result) -> str:
     """How many runs took a smaller step than the study's, and why (auto_step)."""
     from ..pipeline import run_step
 
-    steps = [run_step(result.runner, k) for st in result.stages for k in st.keys]
+    steps = [run_step(result.store, k) for st in result.stages for k in st.keys]
     smaller = [s for s in steps if s.get("step", result.study.solver.step)
                < result.study.solver.step * (1 - 1e-9)]
     if not smaller:
@@ -219,7 +223,7 @@ def _step_note(result) -> str:
 def write_study_report(result, path: str | Path) -> Path:
     study = result.study
     ex = study.excitation
-    c = result.runner.counts
+    c = result.counts
     page = Page(f"sensfw study report: {study.name}", study.spec.study.description)
     page.p(f"Model {study.spec.model.name}, output channel {study.output}; log chirp "
            f"{ex.f0:g} Hz -> {ex.f1:g} Hz in {ex.duration:g} s at {ex.fs:g} Hz, amplitude "

@@ -6,12 +6,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from ..errors import SensfwError
 from .executor import BACKENDS, ProcessPool, default_workers, run
 from .spec import RunResult, RunSpec, execute
 from .store import RunStore
 
 __all__ = ["BACKENDS", "ProcessPool", "RunCounts", "RunResult", "RunSpec", "RunStore",
-           "Runner", "default_workers", "execute"]
+           "Runner", "StoredRuns", "default_workers", "execute"]
 
 
 @dataclass
@@ -106,3 +107,36 @@ class Runner:
 
     def load(self, key: str) -> RunResult | None:
         return self.store.load(key)
+
+
+class MissingRunError(SensfwError):
+    """A run that should be in the run store is not (``StoredRuns`` never simulates)."""
+
+
+@dataclass
+class StoredRuns:
+    """The :class:`Runner` interface over a run store that never simulates: :meth:`run`
+    checks that every spec has a stored result and raises :class:`MissingRunError` if not.
+    Used to rebuild a report from an output folder (``sensfw report DIR``)."""
+
+    store: RunStore
+    counts: RunCounts = field(default_factory=RunCounts)
+
+    def run(self, specs: Sequence[RunSpec], label: str = "runs",
+            on_result: Callable[[RunSpec, RunResult], None] | None = None) -> dict[str, str]:
+        status = {}
+        for s in specs:
+            key = s.key()
+            rec = self.store.record(key)
+            if rec is None:
+                raise MissingRunError(f"{label}: run {key} is not in the run store "
+                                      f"{self.store.folder} (the study, the model or sensfw "
+                                      "changed since it ran?); rerun the study")
+            status[key] = rec["status"]
+        return status
+
+    def load(self, key: str) -> RunResult | None:
+        return self.store.load(key)
+
+    def close(self) -> None:
+        pass

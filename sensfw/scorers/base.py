@@ -5,12 +5,13 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
-from ..errors import SensfwError
+from ..errors import OptionError, SensfwError
 from ..models.base import Signals
 
 
-class ScorerError(SensfwError, ValueError):
-    """A scorer was given a bad option or cannot score the signals it got."""
+class ScorerError(OptionError):
+    """A scorer was given a bad option (``option`` names it, where known) or cannot score the
+    signals it got."""
 
 
 class Scorer(ABC):
@@ -31,13 +32,20 @@ class Scorer(ABC):
         if unknown:
             raise ScorerError(f"scorer {self.name!r}: unknown option(s) "
                               f"{', '.join(sorted(unknown))}; accepted: "
-                              f"{', '.join(sorted(self.defaults)) or '(none)'}")
+                              f"{', '.join(sorted(self.defaults)) or '(none)'}",
+                              option=sorted(unknown)[0])
         self.channel = channel
+        self.given = frozenset(options)  # the options set explicitly (not defaults)
         self.options = {**self.defaults, **options}
         self.validate()
 
     def validate(self) -> None:  # noqa: B027  (optional hook)
         """Check ``self.options``; raise :class:`ScorerError` naming the option."""
+
+    def check_excitation(self, excitation) -> None:  # noqa: B027  (optional hook)
+        """Check the options against the study's excitation (a
+        :class:`~sensfw.excitation.Chirp`) before anything runs; raise :class:`ScorerError`
+        with ``option=`` naming the option."""
 
     def signal(self, signals: Signals):
         name = self.channel or next(iter(signals.channels))

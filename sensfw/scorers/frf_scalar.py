@@ -21,13 +21,42 @@ class _FRFScorer(Scorer):
         o = self.options
         band = o["band"]
         if not (isinstance(band, (list, tuple)) and len(band) == 2
-                and 0 <= float(band[0]) < float(band[1])):
+                and all(isinstance(b, (int, float)) and not isinstance(b, bool)
+                        for b in band)
+                and 0 <= float(band[0]) < float(band[1]) < float("inf")):
             raise ScorerError(f"scorer {self.name!r}: band must be [fmin, fmax] in Hz with "
-                              f"fmin < fmax, got {band!r}")
+                              f"0 <= fmin < fmax, got {band!r}", option="band")
         if o["estimator"] not in ESTIMATORS:
-            raise ScorerError(f"scorer {self.name!r}: estimator must be one of {ESTIMATORS}")
-        if not float(o["eps"]) > 0 or not float(o["db_ref"]) > 0:
-            raise ScorerError(f"scorer {self.name!r}: eps and db_ref must be > 0")
+            raise ScorerError(f"scorer {self.name!r}: estimator must be one of {ESTIMATORS}",
+                              option="estimator")
+        n = o["nperseg"]
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 8):
+            raise ScorerError(f"scorer {self.name!r}: nperseg must be None or an integer >= 8, "
+                              f"got {n!r}", option="nperseg")
+        for key in ("eps", "db_ref"):
+            v = o[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+                raise ScorerError(f"scorer {self.name!r}: {key} must be a number > 0, got "
+                                  f"{v!r}", option=key)
+
+    def check_excitation(self, excitation) -> None:
+        """A band the study sets must lie below the Nyquist frequency and inside the
+        excitation's sweep f0..f1 (outside it the FRF is the ratio of noise to nothing). The
+        default band (the paper's 50 Hz..5 kHz) is cut to the record's frequencies."""
+        if "band" not in self.given:
+            return
+        lo, hi = (float(b) for b in self.options["band"])
+        nyquist = excitation.fs / 2
+        if hi > nyquist:
+            raise ScorerError(f"scorer {self.name!r}: band [{lo:g}, {hi:g}] Hz reaches above "
+                              f"the Nyquist frequency {nyquist:g} Hz (fs = {excitation.fs:g} "
+                              "Hz)", option="band")
+        f0, f1 = sorted((excitation.f0, excitation.f1))
+        tol = 1e-9 * f1
+        if lo < f0 - tol or hi > f1 + tol:
+            raise ScorerError(f"scorer {self.name!r}: band [{lo:g}, {hi:g}] Hz is not inside "
+                              f"the excitation's sweep f0..f1 = [{f0:g}, {f1:g}] Hz",
+                              option="band")
 
     def db(self, signals: Signals) -> tuple[np.ndarray, np.ndarray]:
         """FRF magnitude in dB re ``db_ref`` over the band, and the frequencies."""

@@ -28,10 +28,11 @@ class THD(Scorer):
 
     def validate(self):
         if self.options["unit"] not in ("percent", "dBc"):
-            raise ScorerError("scorer 'thd': unit must be 'percent' or 'dBc'")
+            raise ScorerError("scorer 'thd': unit must be 'percent' or 'dBc'", option="unit")
         n = self.options["n_harmonics"]
-        if n is not None and (not isinstance(n, int) or n < 2):
-            raise ScorerError("scorer 'thd': n_harmonics must be an integer >= 2")
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 2):
+            raise ScorerError("scorer 'thd': n_harmonics must be an integer >= 2",
+                              option="n_harmonics")
 
     def score(self, signals, reference=None):
         o = self.options
@@ -50,9 +51,9 @@ class OrderAmplitude(Scorer):
 
     def validate(self):
         n = self.options["order"]
-        if not isinstance(n, int) or n < 1:
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise ScorerError(f"scorer 'order_amplitude': order must be an integer >= 1, "
-                              f"got {n!r}")
+                              f"got {n!r}", option="order")
 
     def score(self, signals, reference=None):
         n = self.options["order"]

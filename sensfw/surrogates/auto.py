@@ -3,26 +3,52 @@ of Optimal Prognosis, Most & Will 2008)."""
 
 from __future__ import annotations
 
-from sklearn.base import BaseEstimator, RegressorMixin
+from numbers import Integral
+from typing import ClassVar
 
+from sklearn.utils._param_validation import Interval
+from sklearn.utils.validation import check_is_fitted
+
+from ..errors import UnknownPluginError
 from ..plugins import surrogates
-from ._validation import SurrogateError, check_xy
+from .base import SurrogateBase, SurrogateError
 
 DEFAULT = ("eq18", "polynomial", "gaussian_process", "random_forest")
 
 
 @surrogates.register("auto")
-class Auto(RegressorMixin, BaseEstimator):
+class Auto(SurrogateBase):
     """Fits each of ``candidates``, scores each by k-fold Q^2 (``cv`` folds, seeded) and
-    keeps the best (``chosen_``, all scores in ``scores_``); predictions delegate to it.
-    Candidates that cannot be fitted on the data (e.g. Eq. 18 with too few runs) are
-    skipped."""
+    keeps the best (``chosen_``, all scores in ``scores_``); predictions, the summary, the
+    coefficient tables, leave-one-out and intervals are the chosen surrogate's. Candidates
+    that cannot be fitted on the data (e.g. Eq. 18 with too few runs) are skipped."""
+
+    _parameter_constraints: ClassVar[dict] = {
+        "candidates": ["array-like"],
+        "bounds": ["array-like", None],
+        "cv": [Interval(Integral, 2, None, closed="left")],
+        "random_state": ["random_state"],
+    }
 
     def __init__(self, candidates=DEFAULT, bounds=None, cv: int = 5, random_state: int = 0):
         self.candidates = candidates
         self.bounds = bounds
         self.cv = cv
         self.random_state = random_state
+
+    def _check_options(self) -> None:
+        for name in self.candidates:
+            if name == "auto":
+                raise SurrogateError("Auto: 'auto' cannot be its own candidate",
+                                     option="candidates")
+            try:
+                surrogates.get(name)
+            except UnknownPluginError as err:
+                raise SurrogateError(f"Auto: candidates: {err}", option="candidates") from None
+
+    @property
+    def loo_method(self) -> str | None:
+        return self.estimator_.loo_method if hasattr(self, "estimator_") else None
 
     def fit(self, X, y):
         import inspect
@@ -32,9 +58,12 @@ class Auto(RegressorMixin, BaseEstimator):
         from ..analysis.validation import q2_cv
         from . import make_surrogate
 
-        check_xy(self, X, y, fit=True)
+        _, y = self._begin_fit(X, y)  # the candidates get X as given (feature names)
+        if len(y) < 3:
+            raise SurrogateError(f"Auto: {len(y)} run(s) (n_samples = {len(y)}) are too few "
+                                 "to cross-validate the candidates")
         self.scores_ = {}
-        fitted = {}
+        fitted, why = {}, []
         folds = KFold(n_splits=min(self.cv, len(y)), shuffle=True,
                       random_state=self.random_state)
         for name in self.candidates:
@@ -45,20 +74,26 @@ class Auto(RegressorMixin, BaseEstimator):
             try:
                 self.scores_[name] = q2_cv(est, X, y, folds)
                 fitted[name] = est.fit(X, y)
-            except SurrogateError:
+            except SurrogateError as err:
+                why.append(str(err))
                 continue
         if not fitted:
-            raise SurrogateError("Auto: no candidate could be fitted")
+            raise SurrogateError(f"Auto: no candidate could be fitted ({'; '.join(why)})")
         self.chosen_ = max(fitted, key=lambda n: self.scores_[n])
         self.estimator_ = fitted[self.chosen_]
-        self.summary_ = getattr(self.estimator_, "summary_", None)
+        self.summary_ = self.estimator_.summary_
+        self.coefficient_table_ = self.estimator_.coefficient_table_
+        self.coefficient_table_coded_ = self.estimator_.coefficient_table_coded_
         return self
 
     def predict(self, X):
+        self._check_predict(X)
         return self.estimator_.predict(X)
 
+    def loo_predict(self):
+        check_is_fitted(self)
+        return self.estimator_.loo_predict()
+
     def predict_interval(self, X, alpha: float = 0.05):
-        if not hasattr(self.estimator_, "predict_interval"):
-            raise SurrogateError(f"Auto chose {self.chosen_}, which has no prediction "
-                                 "intervals")
+        self._check_predict(X)
         return self.estimator_.predict_interval(X, alpha=alpha)

@@ -21,13 +21,15 @@ default, which is the paper's Eq. 18.
 from __future__ import annotations
 
 from itertools import combinations
+from typing import ClassVar
 
 import numpy as np
 import pandas as pd
-from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils._param_validation import StrOptions
+from sklearn.utils.validation import check_is_fitted
 
 from ..plugins import surrogates
-from ._validation import SurrogateError, check_xy, scaling
+from .base import SurrogateBase, SurrogateError, feature_names, scaling
 
 
 def design_matrix(X: np.ndarray, names: list[str], interaction: str = "product"):
@@ -82,7 +84,7 @@ def coded_to_physical(m: int, mid: np.ndarray, half: np.ndarray) -> np.ndarray:
 
 
 @surrogates.register("eq18")
-class Eq18(RegressorMixin, BaseEstimator):
+class Eq18(SurrogateBase):
     """Quadratic regression with pairwise interactions (Eq. 18).
 
     Parameters
@@ -93,11 +95,22 @@ class Eq18(RegressorMixin, BaseEstimator):
     bounds : list of (low, high), optional
         Coding bounds per variable (e.g. the design's bounds).
 
-    Fitted attributes: ``coefficients_`` (DataFrame term/estimate/se/t/p in the fitted
-    coding), ``coefficients_physical_`` (physical units), ``summary_`` (r2, r2_adj, f_stat,
-    f_pvalue, n_obs, n_terms, df_resid, q2 = leave-one-out 1 - PRESS/SS_tot, rmse),
-    ``result_`` (the statsmodels results).
+    Fitted attributes: ``coefficient_table_`` (DataFrame term/estimate/se/t/p in physical
+    units) and ``coefficient_table_coded_`` (in the fitted coding), also named
+    ``coefficients_physical_`` and ``coefficients_``; ``summary_`` (r2, r2_adj, f_stat,
+    f_pvalue, n_obs, n_terms, df_resid, q2 = leave-one-out 1 - PRESS/SS_tot, rmse, response);
+    ``result_`` (the statsmodels results). Leave-one-out by the hat matrix (``loo_method``);
+    prediction intervals from the OLS fit.
     """
+
+    _parameter_constraints: ClassVar[dict] = {
+        "interaction": [StrOptions({"product", "ratio"})],
+        "coding": [StrOptions({"coded", "physical"})],
+        "bounds": ["array-like", None],
+        "log_features": [StrOptions({"auto"}), "array-like", None],
+        "log_response": ["boolean"],
+    }
+    loo_method = "hat matrix (PRESS)"
 
     def __init__(self, interaction: str = "product", coding: str = "coded", bounds=None,
                  log_features=None, log_response: bool = False):
@@ -107,31 +120,25 @@ class Eq18(RegressorMixin, BaseEstimator):
         self.log_features = log_features
         self.log_response = log_response
 
-    def _check(self):
-        if self.interaction not in ("product", "ratio"):
-            raise SurrogateError("Eq18: interaction must be 'product' or 'ratio'")
-        if self.coding not in ("coded", "physical"):
-            raise SurrogateError("Eq18: coding must be 'coded' or 'physical'")
+    def _check_options(self):
         if self.interaction == "ratio" and self.coding != "physical":
             raise SurrogateError("Eq18: ratio terms x_i/x_j are only meaningful in physical "
-                                 "units (coded values cross zero); use coding='physical'")
+                                 "units (coded values cross zero); use coding='physical'",
+                                 option="interaction")
 
     def _logs(self, X: np.ndarray, names: list[str]) -> np.ndarray:
         """Which columns are regressed on log10 (decided at fit)."""
         lf = self.log_features
         if lf is None:
             return np.zeros(len(names), bool)
-        if isinstance(lf, str):
-            if lf != "auto":
-                raise SurrogateError("Eq18: log_features must be None, 'auto' or a list of "
-                                     "feature names")
+        if isinstance(lf, str):  # "auto" (checked by _parameter_constraints)
             lo, hi = (np.asarray(self.bounds, float).T if self.bounds is not None
                       else (X.min(axis=0), X.max(axis=0)))
             return (lo > 0) & (hi >= 10 * lo)
         unknown = set(lf) - set(names)
         if unknown:
             raise SurrogateError(f"Eq18: log_features {sorted(unknown)} are not features "
-                                 f"({', '.join(names)})")
+                                 f"({', '.join(names)})", option="log_features")
         return np.array([n in lf for n in names])
 
     def _features(self, X: np.ndarray) -> np.ndarray:
@@ -148,13 +155,12 @@ class Eq18(RegressorMixin, BaseEstimator):
     def fit(self, X, y):
         import statsmodels.api as sm
 
-        self._check()
-        X, y = check_xy(self, X, y, fit=True)
+        X, y = self._begin_fit(X, y)
         if self.log_response:
             if np.any(y <= 0):
                 raise SurrogateError("Eq18: log_response needs positive responses")
             y = np.log(y)
-        names = list(self.feature_names_in_)
+        names = feature_names(self)
         self.log_mask_ = self._logs(X, names)
         U = self._features(X)
         bounds = None
@@ -166,7 +172,8 @@ class Eq18(RegressorMixin, BaseEstimator):
                                                                strict=True)]
         A, terms = design_matrix(self._encode(U), fnames, self.interaction)
         if len(y) <= A.shape[1]:
-            raise SurrogateError(f"Eq18: {len(y)} runs cannot support {A.shape[1]} "
+            raise SurrogateError(f"Eq18: {len(y)} runs (n_samples = {len(y)}) cannot support "
+                                 f"{A.shape[1]} "
                                  f"coefficients (1 + 2m + m(m-1)/2 for m = {X.shape[1]})")
         res = sm.OLS(y, A).fit()
         self.result_ = res
@@ -195,12 +202,16 @@ class Eq18(RegressorMixin, BaseEstimator):
             "n_obs": int(res.nobs), "n_terms": int(A.shape[1]), "df_resid": float(res.df_resid),
             "q2": float(1 - press / ss_tot) if ss_tot > 0 else float("nan"),
             "rmse": float(np.sqrt(np.mean(e**2))),
+            "response": "log(y)" if self.log_response else "y",
         }
+        self.press_residuals_ = e / (1 - h)
+        self.coefficient_table_ = self.coefficients_physical_
+        self.coefficient_table_coded_ = self.coefficients_
         return self
 
     def _matrix(self, X):
-        X = check_xy(self, X)
-        A, _ = design_matrix(self._encode(self._features(X)), list(self.feature_names_in_),
+        X = self._check_predict(X)
+        A, _ = design_matrix(self._encode(self._features(X)), feature_names(self),
                              self.interaction)
         return A
 
@@ -208,10 +219,18 @@ class Eq18(RegressorMixin, BaseEstimator):
         return np.exp(v) if self.log_response else v
 
     def predict(self, X):
-        return self._back(self.result_.predict(self._matrix(X)))
+        A = self._matrix(X)
+        return self._back(self.result_.predict(A))
+
+    def loo_predict(self) -> np.ndarray:
+        """Leave-one-out predictions at the training runs from the hat matrix,
+        ``y_i - e_i / (1 - h_ii)`` (on the response scale of the fit, see ``summary_``)."""
+        check_is_fitted(self)
+        return self._back(self.result_.model.endog - self.press_residuals_)
 
     def predict_interval(self, X, alpha: float = 0.05):
         """(lower, upper) (1 - alpha) prediction intervals for new observations."""
-        frame = self.result_.get_prediction(self._matrix(X)).summary_frame(alpha=alpha)
+        A = self._matrix(X)
+        frame = self.result_.get_prediction(A).summary_frame(alpha=alpha)
         return (self._back(frame["obs_ci_lower"].to_numpy()),
                 self._back(frame["obs_ci_upper"].to_numpy()))

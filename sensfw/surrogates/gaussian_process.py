@@ -2,23 +2,36 @@
 
 from __future__ import annotations
 
+from numbers import Integral
+from typing import ClassVar
+
 import numpy as np
 from scipy import stats
-from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted
 
 from ..plugins import surrogates
-from ._validation import check_xy, scaling
+from .base import SurrogateBase, SurrogateError, feature_names, scaling
 
 
 @surrogates.register("gaussian_process")
-class GaussianProcess(RegressorMixin, BaseEstimator):
+class GaussianProcess(SurrogateBase):
     """``C * RBF(length scale per input) + White`` on inputs scaled to [0, 1] (``bounds`` or
-    the data range), normalised targets, ``n_restarts_optimizer`` restarts of the marginal
-    likelihood optimisation (seeded). ``predict(X, return_std=True)`` gives the predictive
-    standard deviation, which includes the fitted noise. ``log_features="auto"`` works on
-    log10 of every input whose range spans a factor 10 or more (contact stiffnesses,
-    transition velocities), where a response usually varies evenly per decade."""
+    the data range), targets standardised here (``y_mean_``, ``y_scale_``: the fitted
+    scikit-learn model works on ``(y - y_mean_) / y_scale_``), ``n_restarts_optimizer``
+    restarts of the marginal likelihood optimisation (seeded). ``predict(X, return_std=True)``
+    gives the predictive standard deviation, which includes the fitted noise.
+    ``log_features="auto"`` works on log10 of every input whose range spans a factor 10 or
+    more (contact stiffnesses, transition velocities), where a response usually varies
+    evenly per decade."""
 
+    _parameter_constraints: ClassVar[dict] = {
+        "bounds": ["array-like", None],
+        "n_restarts_optimizer": [Interval(Integral, 0, None, closed="left")],
+        "random_state": ["random_state"],
+        "noise": ["boolean"],
+        "log_features": [StrOptions({"auto"}), "array-like", None],
+    }
     loo_method = "closed form (R&W Eq. 5.12)"
 
     def __init__(self, bounds=None, n_restarts_optimizer: int = 3, random_state: int = 0,
@@ -41,21 +54,28 @@ class GaussianProcess(RegressorMixin, BaseEstimator):
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
-        X, y = check_xy(self, X, y, fit=True)
+        X, y = self._begin_fit(X, y)
         b = None if self.bounds is None else np.asarray(self.bounds, float)
-        if self.log_features == "auto":
+        if b is not None and b.shape != (X.shape[1], 2):
+            raise SurrogateError(f"GaussianProcess: bounds must be {X.shape[1]} pairs "
+                                 f"(low, high), got shape {b.shape}", option="bounds")
+        if isinstance(self.log_features, str):  # "auto"
             lo, hi = (b[:, 0], b[:, 1]) if b is not None else (X.min(0), X.max(0))
             self.log_mask_ = (lo > 0) & (hi >= 10 * lo)
         elif self.log_features is None:
             self.log_mask_ = np.zeros(X.shape[1], bool)
         else:
-            names = list(self.feature_names_in_)
-            self.log_mask_ = np.array([n in self.log_features for n in names])
+            self.log_mask_ = np.array([n in self.log_features for n in feature_names(self)])
         X = self._transform(X)
         if b is not None:
             b = np.where(self.log_mask_[:, None], np.log10(np.maximum(b, 1e-300)), b)
         mid, half = scaling(self, X, b)
         self.lo_, self.span_ = mid - half, 2 * half
+        # standardise y here (as normalize_y=True would) so that leave-one-out predictions
+        # can be mapped back without scikit-learn's private normalisation attributes
+        self.y_mean_ = float(np.mean(y))
+        std = float(np.std(y))
+        self.y_scale_ = std if std > 10 * np.finfo(float).eps else 1.0
         d = X.shape[1]
         kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF([0.5] * d, (1e-2, 1e2))
         if self.noise:
@@ -63,29 +83,36 @@ class GaussianProcess(RegressorMixin, BaseEstimator):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
             self.model_ = GaussianProcessRegressor(
-                kernel, normalize_y=True, n_restarts_optimizer=self.n_restarts_optimizer,
-                random_state=self.random_state).fit((X - self.lo_) / self.span_, y)
+                kernel, normalize_y=False, n_restarts_optimizer=self.n_restarts_optimizer,
+                random_state=self.random_state).fit((X - self.lo_) / self.span_,
+                                                    (y - self.y_mean_) / self.y_scale_)
         return self
 
     def predict(self, X, return_std: bool = False):
-        X = self._transform(check_xy(self, X))
-        return self.model_.predict((X - self.lo_) / self.span_, return_std=return_std)
+        X = self._transform(self._check_predict(X))
+        out = self.model_.predict((X - self.lo_) / self.span_, return_std=return_std)
+        if return_std:
+            mean, std = out
+            return mean * self.y_scale_ + self.y_mean_, np.asarray(std) * self.y_scale_
+        return out * self.y_scale_ + self.y_mean_
 
     def loo_predict(self) -> np.ndarray:
         """Leave-one-out predictions at the training points with the fitted kernel held
         fixed, in closed form (Rasmussen & Williams 2006, Eq. 5.12):
-        ``mu_i = y_i - [K^-1 y]_i / [K^-1]_ii``. One Cholesky solve instead of n refits;
-        the hyperparameters are not re-optimised per left-out point (R&W Sect. 5.4.2)."""
+        ``mu_i = y_i - [K^-1 y]_i / [K^-1]_ii`` on the standardised targets. One Cholesky
+        solve instead of n refits; the hyperparameters are not re-optimised per left-out
+        point (R&W Sect. 5.4.2)."""
         from scipy.linalg import cho_solve
 
+        check_is_fitted(self)
         m = self.model_
         n = m.L_.shape[0]
         k_inv_diag = np.diag(cho_solve((m.L_, True), np.eye(n)))
-        y_norm = m.y_train_
-        pred_norm = y_norm - m.alpha_ / k_inv_diag
-        return pred_norm * m._y_train_std + m._y_train_mean
+        pred = m.y_train_ - m.alpha_ / k_inv_diag
+        return pred * self.y_scale_ + self.y_mean_
 
     def predict_interval(self, X, alpha: float = 0.05):
+        """Gaussian (1 - alpha) predictive intervals."""
         mean, std = self.predict(X, return_std=True)
         z = stats.norm.ppf(1 - alpha / 2)
-        return mean - z * std, mean + z * np.asarray(std)
+        return mean - z * std, mean + z * std

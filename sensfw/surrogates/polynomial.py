@@ -2,19 +2,29 @@
 
 from __future__ import annotations
 
+from numbers import Integral
+from typing import ClassVar
+
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..plugins import surrogates
-from ._validation import SurrogateError, check_xy, scaling
+from .base import SurrogateBase, SurrogateError, scaling
 
 
 @surrogates.register("polynomial")
-class Polynomial(RegressorMixin, BaseEstimator):
+class Polynomial(SurrogateBase):
     """All monomials up to ``degree`` of the inputs coded to [-1, 1] (``bounds`` or the data
     range), fitted by least squares, or sparsely with ``selection="lars"`` (LassoLarsCV:
     least-angle regression with the penalty chosen by cross-validation, for few runs and
     many terms)."""
+
+    _parameter_constraints: ClassVar[dict] = {
+        "degree": [Interval(Integral, 1, None, closed="left")],
+        "selection": [StrOptions({"lars"}), None],
+        "bounds": ["array-like", None],
+        "cv": [Interval(Integral, 2, None, closed="left")],
+    }
 
     def __init__(self, degree: int = 2, selection: str | None = None, bounds=None,
                  cv: int = 5):
@@ -27,11 +37,7 @@ class Polynomial(RegressorMixin, BaseEstimator):
         from sklearn.linear_model import LassoLarsCV, LinearRegression
         from sklearn.preprocessing import PolynomialFeatures
 
-        if not isinstance(self.degree, int) or self.degree < 1:
-            raise SurrogateError("Polynomial: degree must be an integer >= 1")
-        if self.selection not in (None, "lars"):
-            raise SurrogateError("Polynomial: selection must be None or 'lars'")
-        X, y = check_xy(self, X, y, fit=True)
+        X, y = self._begin_fit(X, y)
         self.mid_, self.half_ = scaling(self, X, self.bounds)
         self.features_ = PolynomialFeatures(self.degree, include_bias=False)
         A = self.features_.fit_transform((X - self.mid_) / self.half_)
@@ -39,12 +45,13 @@ class Polynomial(RegressorMixin, BaseEstimator):
             self.model_ = LassoLarsCV(cv=min(self.cv, len(y))).fit(A, y)
         else:
             if len(y) <= A.shape[1]:
-                raise SurrogateError(f"Polynomial: {len(y)} runs for {A.shape[1] + 1} terms; "
+                raise SurrogateError(f"Polynomial: {len(y)} runs (n_samples = {len(y)}) for "
+                                     f"{A.shape[1] + 1} terms; "
                                      "use selection='lars' or a lower degree")
             self.model_ = LinearRegression().fit(A, y)
         self.n_terms_ = int(np.count_nonzero(self.model_.coef_)) + 1
         return self
 
     def predict(self, X):
-        X = check_xy(self, X)
+        X = self._check_predict(X)
         return self.model_.predict(self.features_.transform((X - self.mid_) / self.half_))

@@ -2,19 +2,28 @@
 
 from __future__ import annotations
 
-from sklearn.base import BaseEstimator, RegressorMixin
+from numbers import Integral
+from typing import ClassVar
+
+from sklearn.utils._param_validation import Interval
+from sklearn.utils.validation import check_is_fitted
 
 from ..plugins import surrogates
-from ._validation import check_xy
+from .base import SurrogateBase
 
 
 @surrogates.register("random_forest")
-class RandomForest(RegressorMixin, BaseEstimator):
+class RandomForest(SurrogateBase):
     """A seeded random forest; robust to steps and interactions, poor at extrapolation and
     without calibrated prediction intervals. Its leave-one-out check uses the out-of-bag
     predictions (each run predicted by the trees whose bootstrap sample missed it; Breiman
     2001), the bagging analogue of leave-one-out, instead of n refits."""
 
+    _parameter_constraints: ClassVar[dict] = {
+        "n_estimators": [Interval(Integral, 1, None, closed="left")],
+        "min_samples_leaf": [Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+    }
     loo_method = "out-of-bag"
 
     def __init__(self, n_estimators: int = 300, min_samples_leaf: int = 1,
@@ -26,7 +35,7 @@ class RandomForest(RegressorMixin, BaseEstimator):
     def fit(self, X, y):
         from sklearn.ensemble import RandomForestRegressor
 
-        X, y = check_xy(self, X, y, fit=True)
+        X, y = self._begin_fit(X, y)
         self.model_ = RandomForestRegressor(n_estimators=self.n_estimators,
                                             min_samples_leaf=self.min_samples_leaf,
                                             oob_score=True,
@@ -36,7 +45,9 @@ class RandomForest(RegressorMixin, BaseEstimator):
     def loo_predict(self):
         """Out-of-bag predictions at the training runs (NaN where a run was in every
         bootstrap sample, possible only for very few trees)."""
+        check_is_fitted(self)
         return self.model_.oob_prediction_
 
     def predict(self, X):
-        return self.model_.predict(check_xy(self, X))
+        X = self._check_predict(X)
+        return self.model_.predict(X)

@@ -13,6 +13,7 @@ from sensfw.testing import ISHIGAMI_BOUNDS, ishigami, ishigami_indices, quadrati
 NAMES = ["x1", "x2", "x3"]
 
 
+@pytest.mark.slow
 def test_gaussian_process_sobol_indices_of_ishigami_from_200_lhs_runs():
     U = qmc.LatinHypercube(d=3, seed=4).random(200)
     X = pd.DataFrame(-np.pi + 2 * np.pi * U, columns=NAMES)
@@ -43,6 +44,7 @@ def test_prediction_interval_coverage_matches_its_level():
     assert set(v["vif"]) == {"a", "b"}
 
 
+@pytest.mark.slow
 def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
     """The GP's leave-one-out predictions (R&W Eq. 5.12) against n independent fits with the
     same fitted kernel, leaving each point out (targets normalised as in the full fit)."""
@@ -54,19 +56,20 @@ def test_gaussian_process_closed_form_loo_equals_fixed_kernel_refits():
     gp = make_surrogate("gaussian_process", bounds=ISHIGAMI_BOUNDS).fit(X, y)
     m = gp.model_
     Xs = (X.to_numpy() - gp.lo_) / gp.span_
-    yn = (y - m._y_train_mean) / m._y_train_std
+    yn = (y - gp.y_mean_) / gp.y_scale_
     ref = np.empty(len(y))
     for i in range(len(y)):
         keep = np.arange(len(y)) != i
         fixed = GaussianProcessRegressor(m.kernel_, optimizer=None, alpha=m.alpha)
         fixed.fit(Xs[keep], yn[keep])
-        ref[i] = fixed.predict(Xs[i : i + 1])[0] * m._y_train_std + m._y_train_mean
+        ref[i] = fixed.predict(Xs[i : i + 1])[0] * gp.y_scale_ + gp.y_mean_
     np.testing.assert_allclose(gp.loo_predict(), ref, rtol=1e-8, atol=1e-8 * np.std(y))
     q2 = validate(gp, X, y)["q2_loo"]
     assert q2 == pytest.approx(1 - np.sum((y - ref) ** 2) / np.sum((y - y.mean()) ** 2),
                                rel=1e-9)
 
 
+@pytest.mark.slow
 def test_random_forest_out_of_bag_q2_is_close_to_refit_leave_one_out():
     """Out-of-bag predictions stand in for n refits: each run is predicted by the ~37 % of
     trees that never saw it, as in leave-one-out (with fewer trees, hence the tolerance)."""

@@ -17,6 +17,8 @@ from sensfw.plugins import effects
 from sensfw.runs import Runner, RunStore
 from sensfw.study import Study
 
+pytestmark = pytest.mark.slow  # calibrations with many shaft simulations
+
 ROOT = Path(__file__).resolve().parents[2]
 NOISE = 0.02  # noise std as a fraction of each channel's RMS
 EFFECTS = ["friction", "contact_hardening", "preload", "added_mass", "flexible_mode",
@@ -97,7 +99,7 @@ def test_two_levels_amplitude_dependence_reported_and_used(study, runner, cli, t
     files = [measurement(study, tmp_path, text, seed=1, amplitude=0.05, name="lo.csv"),
              measurement(study, tmp_path, text, seed=2, amplitude=0.2, name="hi.csv")]
     study_file = tmp_path / "s.toml"
-    from sensfw.tomlw import dumps
+    from tomlkit import dumps
 
     study_file.write_text(dumps(short_quick()))
     args = [a for f in files for a in ("-m", f)]
@@ -120,7 +122,7 @@ def test_augment_start_from_a_diagnose_file_without_the_effect_is_a_clear_error(
         study, cli, tmp_path):
     meas = measurement(study, tmp_path, None, seed=3)
     study_file = tmp_path / "s.toml"
-    from sensfw.tomlw import dumps
+    from tomlkit import dumps
 
     study_file.write_text(dumps(short_quick()))
     diag = tmp_path / "diagnose.json"

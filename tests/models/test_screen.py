@@ -7,7 +7,10 @@ import json
 import tomllib
 from pathlib import Path
 
-from sensfw.tomlw import dumps
+import pytest
+from tomlkit import dumps
+
+pytestmark = pytest.mark.slow  # a 39-run screen of the shaft model
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -11,6 +11,8 @@ from sensfw.models.base import SolverSettings
 from sensfw.models.shaft_assembly import GROUPS, PARAMETERS, ShaftAssembly
 from sensfw.signal import frf, thd
 
+pytestmark = pytest.mark.slow  # Exudyn simulations of the shaft model
+
 NOMINAL = PARAMETERS.nominal()
 AMP_LOW, AMP_NOMINAL, AMP_HIGH = 0.05, 0.1, 0.2  # N; the study levels (studies/*.toml)
 

@@ -4,6 +4,7 @@ without losing the others."""
 import time
 
 import pytest
+from sensfw_test_models import FAULT_INJECTION
 
 from sensfw.excitation import Chirp
 from sensfw.models.base import SolverSettings
@@ -18,8 +19,8 @@ FAULTS = {"model": "ishigami", "crash": {"parameter": "x1", "above": 2.5},
 
 
 def specs(points, timeout=None):
-    m = models.get("fault_injection")(**FAULTS)
-    ref = {"name": "fault_injection", "options": FAULTS}
+    m = models.get(FAULT_INJECTION)(**FAULTS)
+    ref = {"name": FAULT_INJECTION, "options": FAULTS}
     return [RunSpec.create(m, m.parameters().complete(p), EX, SolverSettings(timeout=timeout),
                            ref) for p in points]
 

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from sensfw_test_models import FAULT_INJECTION
 
 from sensfw.excitation import Chirp
 from sensfw.models.base import SolverSettings
@@ -68,10 +69,10 @@ def test_corrupt_or_half_written_entries_read_as_absent(tmp_path):
 
 def test_failed_runs_are_recorded_with_their_reason(tmp_path):
     store = RunStore(tmp_path)
-    m = models.get("fault_injection")(model="two_dof", diverge={"parameter": "k1",
+    m = models.get(FAULT_INJECTION)(model="two_dof", diverge={"parameter": "k1",
                                                                  "above": 4500.0})
     s = RunSpec.create(m, m.parameters().complete({"k1": 6000.0}), EX, SolverSettings(),
-                       {"name": "fault_injection", "options": {
+                       {"name": FAULT_INJECTION, "options": {
                            "model": "two_dof", "diverge": {"parameter": "k1", "above": 4500.0}}})
     res = execute(s)
     assert not res.ok and "diverged" in res.error and "k1=6000" in res.error

@@ -1,0 +1,84 @@
+"""`sensfw report DIR` rebuilds a study's report from its output folder without simulating
+(issue 12, item 5)."""
+
+import json
+import re
+import shutil
+
+import pytest
+
+import sensfw.runs
+import sensfw.runs.executor
+import sensfw.runs.spec
+from sensfw.errors import SensfwError
+from sensfw.pipeline import load_result, results_json
+from sensfw.report.study import write_study_report
+
+pytestmark = pytest.mark.slow  # uses the quick study's session fixture (simulations)
+
+IMG = re.compile(r'src="data:image/png;base64,[^"]*"')
+
+
+def text_of(html):
+    """The report without its embedded images (titles, captions, tables, notes)."""
+    return IMG.sub('src="IMG"', html)
+
+
+def sections(html):
+    return re.findall(r"<h[23]>(.*?)</h[23]>", html)
+
+
+@pytest.fixture
+def folder(quick, tmp_path):
+    """A copy of the quick study's output folder (the session fixture stays untouched)."""
+    out, _ = quick
+    dst = tmp_path / "quick"
+    shutil.copytree(out, dst)
+    return dst
+
+
+@pytest.fixture
+def no_simulation(monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("a simulation was started")
+
+    monkeypatch.setattr(sensfw.runs.spec, "execute", refuse)
+    monkeypatch.setattr(sensfw.runs.executor, "execute", refuse)
+    monkeypatch.setattr(sensfw.runs.executor, "run", refuse)
+    monkeypatch.setattr(sensfw.runs.Runner, "run", refuse)
+
+
+def test_report_is_rebuilt_from_the_folder_without_simulating(folder, no_simulation):
+    original = (folder / "report.html").read_text()
+    before = json.loads((folder / "results.json").read_text())
+    assert (folder / "study.toml").exists()  # `sensfw run` keeps the study with its results
+    (folder / "report.html").unlink()
+    result = load_result(folder)
+    write_study_report(result, folder / "report.html")
+    rebuilt = (folder / "report.html").read_text()
+    # the same sections with the same R²adj, Q², F and n in their titles
+    assert sections(rebuilt) == sections(original)
+    assert any("R²adj=" in s for s in sections(rebuilt))
+    # and the same text everywhere else (tables, notes, captions), the same figures
+    assert text_of(rebuilt) == text_of(original)
+    assert len(IMG.findall(rebuilt)) == len(IMG.findall(original)) >= 6
+    # the rebuilt result is the result: results.json would be written identically
+    assert results_json(result)["stages"] == before["stages"]
+
+
+def test_sensfw_report_command(folder, cli):
+    (folder / "report.html").unlink()
+    store = sorted((folder / "runs").glob("*.json"))
+    proc = cli("report", folder)
+    assert proc.returncode == 0, proc.stderr
+    assert "no simulation" in proc.stdout
+    assert "sensfw study report" in (folder / "report.html").read_text()
+    assert sorted((folder / "runs").glob("*.json")) == store  # nothing added
+
+
+def test_a_run_missing_from_the_store_is_a_clear_error(folder, no_simulation):
+    data = json.loads((folder / "results.json").read_text())
+    key = data["stages"][1]["runs"][0]["key"]
+    (folder / "runs" / f"{key}.json").unlink()
+    with pytest.raises(SensfwError, match=f"run {key} is not in the run store"):
+        load_result(folder)
