@@ -23,9 +23,8 @@ Example (``studies/quick.toml``)::
     scorers = [{ name = "frf_scalar" }]
     select = { by = "frf_scalar", threshold = 0.1, max_variables = 3 }
 
-Over 400 lines because the file schema (pydantic models) and its resolution against the
-model (units, bounds, groups, excitation, solver) belong together; the checks of the stages
-and their plugins are in :mod:`sensfw.study_checks`.
+The file's schema (pydantic models, one per section) is :mod:`sensfw.study_schema`; the
+checks of the stages and their plugins are in :mod:`sensfw.study_checks`.
 """
 
 from __future__ import annotations
@@ -34,17 +33,31 @@ import functools
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import ValidationError
 
 from .errors import SensfwError, StudyError, UnknownPluginError
 from .excitation import Excitation, make_excitation
 from .models.base import Model, SolverSettings
 from .models.stepsize import CALIBRATED_METHODS
 from .params import DesignSpace, Parameter, ParameterSet
-
-Quantity = str | float | int
+from .study_schema import (  # noqa: F401  (re-exported: the schema's names)
+    CalibrationSection,
+    ExcitationSection,
+    ExecutionSection,
+    GainSection,
+    ModelSection,
+    ParameterOverride,
+    Quantity,
+    ScorerSpec,
+    SelectSpec,
+    SolverSection,
+    StageSpec,
+    StudyFile,
+    StudyInfo,
+    SurrogateSpec,
+)
 
 
 @functools.cache
@@ -73,153 +86,6 @@ def to_unit(value: Quantity, unit: str) -> float:
             AttributeError, TypeError, AssertionError) as err:
         raise ValueError(f"cannot read {value!r} as a quantity in {unit or '1'}: {err}") \
             from None
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-
-class StudyInfo(_Strict):
-    name: str
-    description: str = ""
-    seed: int = 0
-
-
-class ModelSection(_Strict):
-    name: str = "shaft_assembly"
-    options: dict[str, Any] = Field(default_factory=dict)
-    output: str | None = None  # FRF/order output channel; default: the model's default_output
-
-
-class GainSection(_Strict):
-    """The shaker's gain (N/V) when measurements record the amplifier voltage."""
-
-    nominal: Quantity
-    min: Quantity
-    max: Quantity
-
-
-class ExcitationSection(_Strict):
-    """The study's excitation; ``kind`` is what a study run uses, ``drive`` how the model is
-    driven for a measurement: ``auto`` (the ideal excitation when the record is it, else the
-    measured record), ``measured`` (always the record) or ``ideal`` (refuse other records)."""
-
-    kind: Literal["log_chirp", "linear_sweep", "stepped_sine", "random"] = "log_chirp"
-    f0: Quantity = "50 Hz"
-    f1: Quantity = "5 kHz"
-    duration: Quantity = "1 s"
-    fs: Quantity = "20 kHz"
-    amplitude: Quantity = "0.1 N"
-    tail: Quantity = "0 s"
-    steps: int = Field(default=20, ge=1)  # stepped_sine
-    seed: int = 0  # random
-    drive: Literal["auto", "measured", "ideal"] = "auto"
-    gain: GainSection | None = None
-
-
-class SolverSection(_Strict):
-    method: Literal["RK44", "RK67", "ExplicitMidpoint", "ExplicitEuler", "DOPRI5"] = "RK44"
-    step: Quantity = "1e-5 s"
-    timeout: Quantity | None = None
-    halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
-    # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py)
-    auto_step: bool = True
-
-
-class ExecutionSection(_Strict):
-    backend: Literal["serial", "processes", "dask"] = "processes"
-    workers: int | None = Field(default=None, ge=1)
-    scheduler: str | None = None
-
-
-class ParameterOverride(_Strict):
-    nominal: Quantity | None = None
-    min: Quantity | None = None
-    max: Quantity | None = None
-
-
-class ScorerSpec(BaseModel):
-    """A scorer and its options; ``label`` names the result (default: the scorer name)."""
-
-    model_config = ConfigDict(extra="allow")
-    name: str
-    label: str | None = None
-    channel: str | None = None
-
-    def options(self) -> dict[str, Any]:
-        return dict(self.model_extra or {})
-
-    @property
-    def key(self) -> str:
-        return self.label or self.name
-
-
-class SurrogateSpec(BaseModel):
-    """A surrogate and its options; ``label`` names it in the results (default: its name)."""
-
-    model_config = ConfigDict(extra="allow")
-    name: str
-    label: str | None = None
-
-    def options(self) -> dict[str, Any]:
-        return dict(self.model_extra or {})
-
-    @property
-    def key(self) -> str:
-        return self.label or self.name
-
-
-class SelectSpec(_Strict):
-    by: str | None = None  # scorer label; default: the stage's first scorer
-    threshold: float = Field(default=0.10, ge=0.0)
-    max_variables: int | None = Field(default=None, ge=1)
-
-
-class StageSpec(_Strict):
-    name: str
-    design: str
-    design_options: dict[str, Any] = Field(default_factory=dict)
-    analysis_options: dict[str, Any] = Field(default_factory=dict)
-    variables: str | list[str] = "all"  # "all", a list, or "selected:<stage>"
-    bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
-    scorers: list[ScorerSpec] = Field(min_length=1)
-    select: SelectSpec | None = None
-    surrogates: list[SurrogateSpec] = Field(default_factory=list)
-    confirmation_runs: int = Field(default=0, ge=0)
-
-    @field_validator("surrogates", mode="before")
-    @classmethod
-    def _surrogate_names(cls, v):
-        return [{"name": x} if isinstance(x, str) else x for x in v] if isinstance(v, list) \
-            else v
-
-    @field_validator("variables")
-    @classmethod
-    def _variables(cls, v):
-        if isinstance(v, str) and v != "all" and not v.startswith("selected:"):
-            raise ValueError("must be 'all', 'selected:<stage name>' or a list of variables")
-        return v
-
-
-class CalibrationSection(_Strict):
-    """The base parameters diagnosis calibrates (design-variable names), optionally with
-    narrower bounds; without it, every variable the screening stage ranks above its
-    threshold."""
-
-    parameters: list[str] | None = None
-    bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
-
-
-class StudyFile(_Strict):
-    study: StudyInfo
-    model: ModelSection = Field(default_factory=ModelSection)
-    excitation: ExcitationSection = Field(default_factory=ExcitationSection)
-    solver: SolverSection = Field(default_factory=SolverSection)
-    execution: ExecutionSection = Field(default_factory=ExecutionSection)
-    parameters: dict[str, ParameterOverride] = Field(default_factory=dict)
-    groups: dict[str, list[str]] | None = None  # None: the model's default grouping
-    stages: list[StageSpec] = Field(min_length=1)
-    calibration: CalibrationSection | None = None
 
 
 def _without(data: Any, locs: list[tuple]) -> Any:

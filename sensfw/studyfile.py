@@ -85,4 +85,15 @@ def add_effect(text: str, name: str, attach: str | None,
     return tomlkit.dumps(doc)
 
 
-__all__ = ["add_effect"]
+def set_calibration(text: str, variables: list[str]) -> str:
+    """``text`` with ``[calibration] parameters = variables`` (created, or its list
+    replaced), keeping everything else."""
+    doc = tomlkit.parse(text)
+    cal = _table(doc, "calibration")
+    arr = tomlkit.array()
+    arr.extend(variables)
+    cal["parameters"] = arr
+    return tomlkit.dumps(doc)
+
+
+__all__ = ["add_effect", "set_calibration"]

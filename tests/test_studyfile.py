@@ -75,18 +75,18 @@ def test_augment_command_writes_the_users_file_with_the_effect(tmp_path, monkeyp
 
     from typer.testing import CliRunner
 
-    import sensfw.measure.diagnose
+    import sensfw.measure.augment
     import sensfw.measure.session
-    import sensfw.report.measure
+    import sensfw.report.diagnosis
     from sensfw.cli import app
 
     params = {k: v["nominal"] for k, v in calibrated("flexible_mode", 1.2).items()}
     monkeypatch.setattr(sensfw.measure.session, "load_measurements",
                         lambda study, files: [SimpleNamespace(file=f) for f in files])
-    monkeypatch.setattr(sensfw.measure.diagnose, "augment",
+    monkeypatch.setattr(sensfw.measure.augment, "augment",
                         lambda *a, **k: {"attach": "crankshaft", "params": params,
                                          "trajectory": [{"step": "calibrated", "error": 1.0}]})
-    monkeypatch.setattr(sensfw.report.measure, "write_augment_report", lambda *a, **k: None)
+    monkeypatch.setattr(sensfw.report.diagnosis, "write_augment_report", lambda *a, **k: None)
     study = tmp_path / "mine.toml"
     study.write_text("# my study 😀\n" + QUICK, encoding="utf-8")
     out = tmp_path / "aug"
@@ -102,5 +102,5 @@ def test_augment_command_writes_the_users_file_with_the_effect(tmp_path, monkeyp
                                                     "attach": "crankshaft"}]
     assert data["parameters"]["flex_frequency"]["nominal"] == pytest.approx(
         params["flex_frequency"])
-    assert "augmented with flexible_mode, calibrated against m.csv" in \
+    assert "augmented with flexible_mode@crankshaft, calibrated against m.csv" in \
         data["study"]["description"]

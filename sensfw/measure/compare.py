@@ -57,29 +57,38 @@ def band_frf_db(sig: Signals, channel: str, bands) -> np.ndarray:
     return np.array(out)
 
 
-def band_noise(sig: Signals, channel: str, bands, half_width: int = 3) -> np.ndarray:
+def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.ndarray:
     """Relative standard error of each band's H1 (:func:`band_frf_db`) from the output
     noise of the record itself.
 
     With ``X = H P + N`` the band estimate ``sum conj(P) X / sum |P|^2`` has the relative
     error ``sqrt(sigma_N^2 / sum_b |H P|^2)``. The per-bin noise variance ``sigma_N^2`` is
-    estimated from the residual of a local fit ``X_k ~ H_k P_k`` (``H_k`` averaged coherently
-    over ``+-half_width`` bins, narrower than a resonance of a few per cent damping at the
-    record's resolution), corrected for the fitted degree of freedom. Bands whose error
-    exceeds ~0.5 (SNR below 6 dB) are noise-limited: the measurement cannot say there how
-    wrong the model is."""
+    estimated from the residual of a local fit ``X_j ~ (a_k + b_k (j - k)) P_j`` over the
+    ``2 half_width + 1`` bins around each bin ``k`` (an FRF that varies linearly across the
+    window, so a resonance of a few per cent damping leaves little structure in the residual),
+    corrected for the two fitted degrees of freedom. Bands whose error is large are
+    noise-limited: the measurement cannot say there how wrong the model is."""
     P = np.fft.rfft(sig.force)
     X = np.fft.rfft(sig.channel(channel))
     f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
-    w = np.ones(2 * half_width + 1)
-    num = np.convolve(np.conj(P) * X, w, mode="same")
-    den = np.convolve(np.abs(P) ** 2, w, mode="same")
-    Hk = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
-    resid = np.abs(X - Hk * P) ** 2 * (len(w) / (len(w) - 1))
+    m = half_width
+    j = np.arange(-m, m + 1, dtype=float)
+    pp = np.abs(P) ** 2
+    px = np.conj(P) * X
+
+    def local(x, weights):  # sum over the window around each bin of weights[j] x[k + j]
+        return np.convolve(x, weights[::-1], mode="same")
+
+    s0, s1, s2 = local(pp, np.ones_like(j)), local(pp, j), local(pp, j * j)
+    t0, t1 = local(px, np.ones_like(j)), local(px, j)
+    det = s0 * s2 - s1 * s1
+    ok = det > 1e-12 * np.maximum(s0 * s2, 1e-300)
+    a = np.divide(t0 * s2 - t1 * s1, det, out=np.zeros_like(t0), where=ok)
+    resid = np.abs(X - a * P) ** 2 * (len(j) / (len(j) - 2))
     out = []
     for lo, _, hi in bands:
         sel = (f >= lo) & (f < hi)
-        signal = np.sum(np.abs(Hk[sel] * P[sel]) ** 2)
+        signal = np.sum(np.abs(a[sel] * P[sel]) ** 2)
         noise = np.sum(resid[sel]) / max(int(sel.sum()), 1)  # per-bin variance
         out.append(float(np.sqrt(noise / signal)) if signal > 0 else np.inf)
     return np.array(out)
@@ -251,7 +260,10 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
     bands = []
     edges = third_octave_bands(*band)
     bm, bx = band_frf_db(model, channel, edges), band_frf_db(measured, channel, edges)
-    noise = band_noise(measured, channel, edges)
+    # the measurement's scatter minus what the model's own record shows (nonlinear
+    # distortion and leakage, shared by both): its random noise (floored at a quarter)
+    e_meas, e_model = band_noise(measured, channel, edges), band_noise(model, channel, edges)
+    noise = np.sqrt(np.maximum(e_meas**2 - e_model**2, (0.25 * e_meas) ** 2))
     for (lo, c, hi), a, b, e in zip(edges, bm, bx, noise, strict=True):
         sel = (f >= lo) & (f < hi)
         if sel.sum() == 0 or not (np.isfinite(a) and np.isfinite(b)):

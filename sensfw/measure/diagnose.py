@@ -138,7 +138,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     h0 = Hypothesis(None, "", base_coords)
     h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), base_coords,
                        start, budget=budget // 4, log=log)
-    (h0_cmp,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
+    (h0_all,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
+    h0_cmp = ev.output_comparisons(h0_all)
     found = _signature_classes(h0_cmp)
     hyps = _hypotheses(study, candidates, found, base_coords, log)
     log(f"{len(hyps)} candidate(s) after the signature classes {sorted(found) or '(none)'}")
@@ -162,15 +163,16 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     rows = [h0.row(n, None, ev)] + [h.row(n, h0, ev) for h in
                                     sorted(hyps, key=lambda h: h.fit.chi2)]
     winner = next((h for h in chosen if h.name == verdict), None)
-    best_cmp = None
+    best_all = None
     if winner is not None:
-        (best_cmp,) = ev.comparisons([ev.variant(winner.spec, winner.fit.values)], "winner")
+        (best_all,) = ev.comparisons([ev.variant(winner.spec, winner.fit.values)], "winner")
     return DiagnoseResult(
         verdict=verdict, reason=reason, variables=names, variables_from=source,
-        rows=rows, n_simulations=ev.n_simulations, n_entries=n,
-        signature_classes=found, nominal=nominal_cmp, calibrated=h0_cmp, best=best_cmp,
-        errors={"nominal": ev.rms_db(nominal_cmp), "parameters": ev.rms_db(h0_cmp),
-                "best": ev.rms_db(best_cmp) if best_cmp else None},
+        channels=ev.channels, rows=rows, n_simulations=ev.n_simulations, n_entries=n,
+        signature_classes=found, nominal=ev.output_comparisons(nominal_cmp),
+        calibrated=h0_cmp, best=ev.output_comparisons(best_all),
+        errors={"nominal": ev.rms_db(nominal_cmp), "parameters": ev.rms_db(h0_all),
+                "best": ev.rms_db(best_all) if best_all else None},
         criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3,
                   "model_db": discrepancy.MODEL_DB, "thd_db": discrepancy.THD_DB})
 
@@ -181,6 +183,7 @@ class DiagnoseResult:
     reason: str
     variables: list[str]
     variables_from: str
+    channels: list[str]
     rows: list[dict]
     n_simulations: int
     n_entries: int
@@ -199,6 +202,7 @@ class DiagnoseResult:
         return {"verdict": self.verdict, "reason": self.reason,
                 "calibration_variables": self.variables,
                 "calibration_variables_from": self.variables_from,
+                "channels": self.channels,
                 "parameters_only": self.rows[0], "ranking": self.ranking,
                 "n_simulations": self.n_simulations, "n_entries": self.n_entries,
                 "signature_classes": self.signature_classes, "errors_db": self.errors,
@@ -257,43 +261,39 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
 
 def _screen(ev: Evaluator, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, log: Log
             ) -> None:
-    """Each candidate at its probes from H0's point: score = the lowest chi2 along the line
-    from H0 (its neutral point) through each probe, up to twice the probe's strength
-    (linear in the residuals), or the probe's own chi2."""
+    """Each candidate at its probes from H0's point (the neutral values make it vanish). Its
+    score is the lowest chi2 it promises: the probe's own, or the linear prediction along
+    the probe's direction ``d = w_probe - w_0`` after the base variables have taken what
+    they can explain (``d`` projected out of the column space of H0's Jacobian), for up to
+    twice the probe's strength. Costs one simulation per probe."""
     base = h0.fit.values
     w0 = h0.fit.best.w
-    batch = []
-    for h in hyps:
-        neutral = dict(h.effect.neutral)
-        for probe in h.effect.probes(h0_cmp):
-            values = {**base, **{p.name: p.nominal for p in h.effect.parameters()},
-                      **neutral, **probe}
-            batch.append((h, values))
-    results: dict[int, list] = {}
+    J = h0.fit.jacobian
+    proj = (J @ np.linalg.pinv(J)) if J is not None and J.size else None
     for h in hyps:  # one batch per hypothesis (its effect spec is part of every run)
-        pts = [v for hh, v in batch if hh is h]
-        results[id(h)] = list(zip(pts, ev.evaluate(h.spec, pts, f"screen {h.name}"),
-                                  strict=True))
-    for h in hyps:
-        best_chi2, best = h0.fit.chi2, Evaluation({**base, **h.effect.neutral,
-                                                   **_fill(h.effect, base)}, w0)
-        for values, w in results[id(h)]:
+        points = [{**base, **_fill(h.effect), **probe} for probe in h.effect.probes(h0_cmp)]
+        ws = ev.evaluate(h.spec, points, f"screen {h.name}")
+        best = Evaluation({**base, **_fill(h.effect)}, w0)
+        score = h0.fit.chi2
+        for values, w in zip(points, ws, strict=True):
             if w is None:
                 continue
+            e = Evaluation(values, w)
+            if e.chi2 < best.chi2:
+                best = e
             d = w - w0
+            if proj is not None:
+                d = d - proj @ d
             dd = float(d @ d)
-            c = float(np.clip(-(w0 @ d) / dd, 0.0, 2.0)) if dd > 0 else 0.0
-            line = float(np.sum((w0 + c * d) ** 2))
-            own = float(np.sum(w * w))
-            best_chi2 = min(best_chi2, line, own)
-            if own < best.chi2:
-                best = Evaluation(values, w)
-        h.screen_chi2 = best_chi2
-        h.screen_best = best
-        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {best_chi2:.4g} (line)")
+            if dd > 0:
+                c = float(np.clip(-(w0 @ d) / dd, 0.0, 2.0))
+                score = min(score, float(np.sum((w0 + c * d) ** 2)))
+            score = min(score, e.chi2)
+        h.screen_chi2, h.screen_best = score, best
+        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {score:.4g} (predicted)")
 
 
-def _fill(effect, base: Mapping[str, float]) -> dict[str, float]:
+def _fill(effect) -> dict[str, float]:
     """Effect parameters at their nominal values overridden by the neutral ones."""
     return {**{p.name: p.nominal for p in effect.parameters()}, **effect.neutral}
 
@@ -334,7 +334,7 @@ def _heldout(ev: Evaluator, h: Hypothesis, log: Log) -> float | None:
     one Gauss-Newton step fitted to the other levels, the left-out level simulated."""
     fit = h.fit
     J, w = fit.jacobian, fit.best.w
-    slices = ev.entries.level_slices()
+    slices = ev.level_slices()
     z = fit.z
     total, count = 0.0, 0
     for lev, sl in enumerate(slices):

@@ -6,11 +6,11 @@ measurement can speak for (its ``used_bands``: within the dynamic range and abov
 noise) and of the THD. Each entry is divided by its standard error, so that a correct model
 leaves residuals of unit variance:
 
-* a band's standard error is the measurement's own (``noise_db``, from its noise:
-  :func:`~sensfw.measure.compare.band_noise`) combined with ``MODEL_DB``, a floor for what
-  no parameter of a good model can fix (the band estimator's own structure, the drive's
-  interpolation; measured as the error of the true model against noise-free synthetic data,
-  0.1-0.3 dB in ``tests/measure/test_diagnose.py``);
+* a band's standard error is the measurement's own random scatter (``noise_db`` of the
+  first comparison, the nominal model's: :func:`~sensfw.measure.compare.band_noise` of the
+  measurement minus that of the model's own record, which shares its nonlinear distortion)
+  combined with ``MODEL_DB``, a floor for what no parameter of a good model can fix (the
+  drive's interpolation, the band estimator);
 * the THD's is ``THD_DB`` (harmonic amplitudes of a short sweep scatter by about 1 dB with
   2 % noise).
 
@@ -31,7 +31,7 @@ import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
 #: standard error floor (dB) of a band entry: model-form tolerance
-MODEL_DB = 0.3
+MODEL_DB = 0.1
 #: standard error (dB) of the THD entry
 THD_DB = 1.5
 #: the entry of a band where the model has no finite response
@@ -40,16 +40,28 @@ MISSING_DB = 40.0
 
 @dataclass(frozen=True)
 class Entries:
-    """Which bands (by centre frequency) of which level enter the residual vector."""
+    """Which bands (by centre frequency) of which comparison enter the residual vector, and
+    the standard error of each entry (fixed once, from the first comparisons, so that every
+    hypothesis is scored with the same weights)."""
 
-    bands: tuple[tuple[float, ...], ...]  # per level, the centre frequencies used
-    thd: tuple[bool, ...]  # per level, whether the THD enters
+    bands: tuple[tuple[float, ...], ...]  # per comparison, the centre frequencies used
+    thd: tuple[bool, ...]  # per comparison, whether the THD enters
+    sigma: tuple[tuple[float, ...], ...] = ()  # per comparison, the entries' standard errors
 
     @classmethod
     def of(cls, comparisons) -> Entries:
+        sigma = []
+        for c in comparisons:
+            s = [math.hypot(b.get("noise_db") or 0.0, MODEL_DB) for b in c.used_bands]
+            sigma.append(tuple(s + ([THD_DB] if c.thd_measured else [])))
         return cls(bands=tuple(tuple(b["centre_hz"] for b in c.used_bands)
                                for c in comparisons),
-                   thd=tuple(bool(c.thd_measured) for c in comparisons))
+                   thd=tuple(bool(c.thd_measured) for c in comparisons), sigma=tuple(sigma))
+
+    def select(self, keep) -> Entries:
+        """The entries of the comparisons at the indices ``keep``."""
+        return Entries(tuple(self.bands[i] for i in keep), tuple(self.thd[i] for i in keep),
+                       tuple(self.sigma[i] for i in keep) if self.sigma else ())
 
     def size(self) -> int:
         return sum(len(b) for b in self.bands) + sum(self.thd)
@@ -67,21 +79,16 @@ def residuals(comparisons: Sequence, entries: Entries) -> tuple[np.ndarray, np.n
     """(dB differences, standard errors) over ``entries`` (see the module docstring). A
     model without harmonics where the measurement has some (THD 0) gets a large but finite
     entry."""
-    r, s = [], []
+    r = []
     for c, centres, thd in zip(comparisons, entries.bands, entries.thd, strict=True):
         by = {b["centre_hz"]: b for b in c.bands}
         for centre in centres:
-            b = by.get(centre)
-            if b is None:  # the model has no response there at all: a gross misfit
-                r.append(MISSING_DB)
-                s.append(MODEL_DB)
-                continue
-            r.append(b["mean_db"])
-            s.append(math.hypot(b.get("noise_db") or 0.0, MODEL_DB))
+            b = by.get(centre)  # None: the model has no response there, a gross misfit
+            r.append(MISSING_DB if b is None else b["mean_db"])
         if thd:
             model = max(c.thd_model or 0.0, 1e-3)
             r.append(20 * math.log10(model / c.thd_measured))
-            s.append(THD_DB)
+    s = [x for part in entries.sigma for x in part]
     return np.array(r, float), np.array(s, float)
 
 

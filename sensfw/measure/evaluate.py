@@ -1,6 +1,11 @@
 """Hypotheses evaluated against the measurements: a point (base design variables and effect
-parameters) -> model runs at every measured level (through the run store) -> comparisons ->
-weighted residuals (:mod:`sensfw.measure.discrepancy`)."""
+parameters) -> model runs at every measured level (through the run store) -> comparisons of
+every sensor channel the measurement and the model share -> weighted residuals
+(:mod:`sensfw.measure.discrepancy`).
+
+Every channel counts: a rig's accelerometers see the structure from different places, and
+what one channel cannot tell apart (a heavier crankshaft or a softer bearing) another can.
+"""
 
 from __future__ import annotations
 
@@ -17,35 +22,48 @@ from .io import Measurement
 from .session import Variant, simulate
 
 
+def shared_channels(study: Study, measurements: Sequence[Measurement]) -> list[str]:
+    """The study's output first, then every other channel all measurements and the model
+    have."""
+    sensors = list(study.model.sensors)
+    common = [c for c in sensors if all(c in m.signals.channels for m in measurements)]
+    return [study.output] + [c for c in common if c != study.output]
+
+
 class Evaluator:
     """Discrepancy of model variants against ``measurements``; ``space`` holds the base
-    design variables a point may set (the rest stay at the study's nominal values)."""
+    design variables a point may set (the rest stay at the study's nominal values);
+    ``channels`` (default: :func:`shared_channels`) are compared at every level."""
 
     def __init__(self, study: Study, measurements: Sequence[Measurement], runner: Runner,
-                 space: DesignSpace | None = None):
+                 space: DesignSpace | None = None, channels: Sequence[str] | None = None):
         self.study, self.meas, self.runner = study, list(measurements), runner
         self.space = space
+        self.channels = list(channels) if channels else shared_channels(study, measurements)
         ex = study.excitation
         self.band = (ex.f0, ex.f1)
         self.n_simulations = 0
         self.entries: discrepancy.Entries | None = None
 
+    @property
+    def n_levels(self) -> int:
+        return len(self.meas)
+
     def variant(self, effect: Mapping | None, values: Mapping[str, float]) -> Variant:
         """The model with ``effect`` (a spec) at the point ``values``."""
         params = {}
-        if self.space is not None:
-            base = {n: values[n] for n in self.space.names if n in values}
-            if base:
-                params = self.space.to_parameters(base)
         names = set(self.space.names) if self.space is not None else set()
+        base = {n: values[n] for n in names if n in values}
+        if base:
+            params = self.space.to_parameters(base)
         params.update({k: v for k, v in values.items() if k not in names})
         return Variant.of([effect] if effect else [], params)
 
     def comparisons(self, variants: Sequence[Variant], label: str,
                     levels: Sequence[int] | None = None
                     ) -> list[list[LevelComparison] | None]:
-        """Per variant, its comparison at every measured level (or at ``levels``, indices
-        of the measurements); ``None`` where a run failed."""
+        """Per variant, its comparisons for every (level, channel), levels outer (or only
+        the ``levels``, indices of the measurements); ``None`` where a run failed."""
         idx = list(range(len(self.meas))) if levels is None else list(levels)
         meas = [self.meas[i] for i in idx]
         sims = simulate(self.study, self.runner, variants, meas, label)
@@ -58,8 +76,8 @@ class Evaluator:
                 if sig is None:
                     comps = None
                     break
-                comps.append(compare_level(m.signals, sig, self.study.output, self.band,
-                                           m.level, m.file))
+                comps += [compare_level(m.signals, sig, ch, self.band, m.level, m.file)
+                          for ch in self.channels]
             out.append(comps)
         if self.entries is None and levels is None:
             first = next((c for c in out if c is not None), None)
@@ -67,14 +85,20 @@ class Evaluator:
                 self.entries = discrepancy.Entries.of(first)
         return out
 
+    def _entries(self, levels: Sequence[int] | None) -> discrepancy.Entries:
+        if levels is None:
+            return self.entries
+        k = len(self.channels)
+        return self.entries.select([i * k + c for i in levels for c in range(k)])
+
     def weighted(self, comps, levels: Sequence[int] | None = None) -> np.ndarray | None:
-        if comps is None:
-            return None
-        entries = self.entries
-        if levels is not None:
-            entries = discrepancy.Entries(tuple(entries.bands[i] for i in levels),
-                                          tuple(entries.thd[i] for i in levels))
-        return discrepancy.weighted(comps, entries)
+        return None if comps is None else discrepancy.weighted(comps, self._entries(levels))
+
+    def level_slices(self) -> list[slice]:
+        """The entries of each level (all its channels) in the residual vector."""
+        per = self.entries.level_slices()
+        k = len(self.channels)
+        return [slice(per[i * k].start, per[i * k + k - 1].stop) for i in range(self.n_levels)]
 
     def evaluate(self, effect: Mapping | None, points: Sequence[Mapping[str, float]],
                  label: str, levels: Sequence[int] | None = None
@@ -84,13 +108,19 @@ class Evaluator:
         return [self.weighted(c, levels) for c in comps]
 
     def rms_db(self, comps) -> float | None:
+        """RMS dB difference over every entry (all levels and channels)."""
         return None if comps is None else discrepancy.rms_db(comps, self.entries)
 
     def rms_db_per_level(self, comps) -> list[float] | None:
         if comps is None:
             return None
+        k = len(self.channels)
         out = []
-        for i, c in enumerate(comps):
-            entries = discrepancy.Entries((self.entries.bands[i],), (self.entries.thd[i],))
-            out.append(discrepancy.rms_db([c], entries))
+        for i in range(self.n_levels):
+            part = comps[i * k:(i + 1) * k]
+            out.append(discrepancy.rms_db(part, self._entries([i])))
         return out
+
+    def output_comparisons(self, comps) -> list[LevelComparison] | None:
+        """The study output's comparison at every level (for plots)."""
+        return None if comps is None else comps[::len(self.channels)]

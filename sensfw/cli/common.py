@@ -1,0 +1,118 @@
+"""What every command shares: the typer app, the consoles, the option types, the error
+handling (user errors exit with status 2 and no traceback), the progress bar and the runner."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from ..errors import SensfwError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Which parameters of a nonlinear multibody model matter, and does the "
+                       "model agree with the rig?")
+console = Console(stderr=True)
+out = Console()
+
+
+Workers = Annotated[int | None, typer.Option(help="worker processes (default: cores)")]
+Backend = Annotated[str | None, typer.Option(help="serial | processes | dask")]
+Scheduler = Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")]
+ShowProgress = Annotated[bool, typer.Option(help="show the progress bar")]
+
+
+def _user_errors(fn):
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except SensfwError as err:
+            console.print(f"[bold red]error:[/] {err}", highlight=False, markup=True,
+                          soft_wrap=True)
+            raise typer.Exit(code=2) from None
+        except KeyboardInterrupt:
+            console.print("[yellow]interrupted; finished runs are kept in the run store[/]")
+            raise typer.Exit(code=130) from None
+    return wrapper
+
+
+class RichProgress:
+    """Runs done/failed with ETA, one bar per batch of runs."""
+
+    def __init__(self, enabled: bool = True):
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.enabled = enabled
+        self._progress = Progress(
+            TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("[red]{task.fields[failed]} failed"),
+            TextColumn("cached {task.fields[cached]}"),
+            TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+            console=console, disable=not enabled, transient=False)
+        self._task = None
+
+    def start(self, label: str, total: int, cached: int) -> None:
+        if not self._progress.live.is_started:
+            self._progress.start()
+        self._task = self._progress.add_task(label, total=total, completed=cached, failed=0,
+                                             cached=cached)
+
+    def advance(self, ok: bool) -> None:
+        task = self._progress.tasks[self._task]
+        self._progress.update(self._task, advance=1,
+                              failed=task.fields["failed"] + (0 if ok else 1))
+
+    def stop(self) -> None:
+        pass
+
+    def close(self) -> None:
+        if self._progress.live.is_started:
+            self._progress.stop()
+
+
+def _runner(study, out_dir: Path, workers, backend, scheduler, retry_failed=False,
+            progress=True):
+    from ..runs import Runner, RunStore
+
+    ex = study.spec.execution
+    return Runner(store=RunStore(out_dir / "runs"),
+                  backend=backend or ("dask" if scheduler else ex.backend),
+                  workers=workers or ex.workers, scheduler=scheduler or ex.scheduler,
+                  progress=RichProgress(progress), retry_failed=retry_failed)
+
+
+@contextlib.contextmanager
+def _running(study, out_dir: Path, workers, backend, scheduler, progress):
+    """A Runner on ``out_dir/runs``; its progress bar and workers are closed on exit."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    runner = _runner(study, out_dir, workers, backend, scheduler, progress=progress)
+    try:
+        yield runner
+    finally:
+        runner.progress.close()
+        runner.close()
+
+
+def _json(path: Path, data) -> None:
+    from ..pipeline import _jsonable
+
+    path.write_text(json.dumps(_jsonable(data), indent=1))
+
+
+Measured = Annotated[list[Path], typer.Option("--measured", "-m",
+                                              help="measurement file(s) (.csv or .uff)")]
+
+

@@ -1,0 +1,276 @@
+"""Measurement commands: simulate (synthetic rig data), compare, diagnose, augment."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import SensfwError
+from .common import (
+    Backend,
+    Measured,
+    Scheduler,
+    ShowProgress,
+    Workers,
+    _json,
+    _running,
+    _user_errors,
+    app,
+    console,
+    out,
+)
+
+
+@app.command()
+@_user_errors
+def simulate(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    out_file: Annotated[Path, typer.Option(
+        "--out", "-o", help="measurement file to write: .csv (one per level) or .uff (all "
+                            "levels in one file)")],
+    set_: Annotated[list[str] | None, typer.Option("--set", help="NAME=VALUE (paper units)")]
+    = None,
+    effect: Annotated[list[str] | None, typer.Option(
+        help="NAME[@PLACE][:PARAM=VALUE,...] hidden physical effect")] = None,
+    noise: Annotated[float, typer.Option(help="noise std as a fraction of each RMS")] = 0.0,
+    seed: Annotated[int, typer.Option(help="noise seed")] = 0,
+    amplitude: Annotated[float | None, typer.Option(help="excitation level (N, or V)")] = None,
+    levels: Annotated[str | None, typer.Option(
+        help="several levels, e.g. 0.1,0.3,1.0 (one file per level, or one UFF)")] = None,
+    excitation: Annotated[str | None, typer.Option(
+        help="log_chirp | linear_sweep | random | stepped_sine (default: the study's)")]
+    = None,
+    offset: Annotated[float, typer.Option(help="DC offset on the force, fraction of the "
+                                               "level")] = 0.0,
+    drift: Annotated[float, typer.Option(help="slow drift of the applied force amplitude, "
+                                              "e.g. 0.2 for +-20 %")] = 0.0,
+    delay: Annotated[float, typer.Option(help="pre-trigger delay (s)")] = 0.0,
+    channel_gain: Annotated[float | None, typer.Option(
+        help="record the amplifier voltage instead of the force: shaker gain in N/V")] = None,
+) -> None:
+    """Simulate one configuration and write it as a rig would record it (synthetic data)."""
+    from ..excitation import KINDS
+    from ..measure.io import write_csv, write_uff
+    from ..measure.synthetic import Rig, synthesize
+    from ..study import Study
+
+    study = Study.load(study_file)
+    sets = {}
+    for item in set_ or []:
+        key, sep, val = item.partition("=")
+        if not sep:
+            raise SensfwError(f"--set {item!r}: expected NAME=VALUE")
+        try:
+            sets[key.strip()] = float(val)
+        except ValueError:
+            raise SensfwError(f"--set {item!r}: expected NAME=VALUE with a number") from None
+    if excitation is not None and (excitation not in KINDS or excitation == "sampled"):
+        raise SensfwError(f"--excitation {excitation!r}: use one of log_chirp, linear_sweep, "
+                          "random, stepped_sine")
+    if levels and amplitude is not None:
+        raise SensfwError("give --amplitude or --levels, not both")
+    try:
+        values = [float(v) for v in levels.split(",")] if levels else [amplitude]
+    except ValueError:
+        raise SensfwError(f"--levels {levels!r}: expected numbers separated by commas") \
+            from None
+    if any(v is not None and not v > 0 for v in values):
+        raise SensfwError(f"--levels {levels!r}: levels must be positive")
+    records = []
+    for i, level in enumerate(values):
+        rig = Rig(noise=noise, offset=offset, drift=drift, delay=delay, gain=channel_gain,
+                  seed=seed + i)
+        sig, info = synthesize(study, sets, effect or [], amplitude=level,
+                               excitation=excitation, rig=rig)
+        records.append((sig, info))
+    out_file.parent.mkdir(parents=True, exist_ok=True)
+    meta = {"source": "sensfw simulate", "excitation": excitation or study.excitation.kind,
+            "effects": [e for e in effect or []], "noise": noise, "offset": offset,
+            "drift": drift, "delay": delay}
+    if out_file.suffix.lower() in (".uff", ".unv"):
+        write_uff(out_file, [(sig, info["amplitude"]) for sig, info in records])
+        written = [out_file]
+    else:
+        written = []
+        for sig, info in records:
+            path = out_file if len(records) == 1 else \
+                out_file.with_name(f"{out_file.stem}_{info['amplitude']:g}{out_file.suffix}")
+            written.append(write_csv(path, sig, level=info["amplitude"], meta=meta))
+    paths = written * len(records) if len(written) == 1 else written
+    for (sig, info), path in zip(records, paths, strict=True):
+        out.print(f"wrote {path} ({len(sig.t)} samples at {sig.fs:g} Hz, {info['excitation']}"
+                  f", level {info['amplitude']:g} {info['unit']}, noise {noise:g})")
+
+
+
+@app.command()
+@_user_errors
+def compare(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
+) -> None:
+    """See where the model fails: FRF error per band, resonances, harmonics, THD, levels."""
+    from ..measure.compare import compare_measurements
+    from ..measure.session import load_measurements
+    from ..report.measure import write_compare_report
+    from ..study import Study
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    for m in meas:
+        for note in m.notes:
+            if "not the study's" in note:
+                console.print(f"[yellow]notice:[/] {m.file}: {note}", highlight=False)
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
+        result = compare_measurements(study, meas, runner)
+    _json(out_dir / "compare.json", result.to_dict())
+    write_compare_report(study, result.levels, result.pairs, result.amplitude, result.notes,
+                         out_dir / "report.html")
+    for c in result.levels:
+        thd = "" if c.thd_model is None else \
+            f"; THD model {c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %"
+        out.print(f"level {c.level:.3g} {c.unit}: FRF error {c.frf_rms_db:.2f} dB RMS "
+                  f"(noise floor {c.noise_floor_db:.2f} dB){thd}")
+    if result.amplitude:
+        for line in result.amplitude["summary"]:
+            out.print("  " + line)
+    out.print(f"-> {out_dir}/compare.json, {out_dir}/report.html")
+
+
+@app.command()
+@_user_errors
+def diagnose(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/diagnose"),
+    candidates: Annotated[str | None, typer.Option(
+        help="comma-separated effects, NAME or NAME@PLACE (default: every registered effect "
+             "at every place it fits)")] = None,
+    budget: Annotated[int, typer.Option(help="simulations for the calibrations")] = 300,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
+) -> None:
+    """Which effect does the model lack, and where? Recalibrate the base parameters alone and
+    with each candidate; rank by BIC and held-out levels."""
+    from ..measure.diagnose import diagnose as run_diagnose
+    from ..measure.session import load_measurements
+    from ..report.diagnosis import write_diagnose_report
+    from ..study import Study
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    t0 = time.perf_counter()
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
+        names = [c.strip() for c in candidates.split(",")] if candidates else None
+        result = run_diagnose(study, meas, runner, names, budget=budget,
+                              log=lambda s: console.print(f"[cyan]{s}"))
+    data = {**result.to_dict(), "wall_s": time.perf_counter() - t0}
+    _json(out_dir / "diagnose.json", data)
+    write_diagnose_report(study, result, out_dir / "report.html")
+    out.print(f"verdict: {result.verdict}  ({result.reason}; {result.n_simulations} "
+              f"simulations, {data['wall_s']:.0f} s)")
+    h0 = result.rows[0]
+    out.print(f"  parameters only: error {result.errors['nominal']:.2f} -> "
+              f"{result.errors['parameters']:.2f} dB, chi2 {h0['chi2']:.1f} for "
+              f"{result.n_entries} entries")
+    for c in h0["calibration"]:
+        flags = f" ({'; '.join(c['flags'])})" if c["flags"] else ""
+        out.print(f"    {c['name']} = {c['value']:.4g} {c['unit']} "
+                  f"[{c['interval'][0]:.4g}, {c['interval'][1]:.4g}]{flags}")
+    for r in result.ranking[:6]:
+        held = "" if r["heldout_chi2_per_entry"] is None else \
+            f", held-out chi2/entry {r['heldout_chi2_per_entry']:.2f}"
+        out.print(f"  {r['hypothesis']:28s} chi2 {r['chi2']:.1f}, dBIC {r['delta_bic']:+.1f}"
+                  f"{held}")
+    out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
+
+
+def _diagnosed_values(path: Path, name: str, attach: str) -> tuple[dict, str]:
+    """The calibrated values (base variables and effect parameters) and the place of effect
+    ``name`` in a diagnose.json."""
+    try:
+        ranking = json.loads(path.read_text()).get("ranking", [])
+        rows = [r for r in ranking
+                if r.get("effect") == name and (not attach or r.get("place") == attach)]
+    except (OSError, ValueError, AttributeError) as err:
+        raise SensfwError(f"{path}: not a readable diagnose.json ({err})") from None
+    if not rows:
+        raise SensfwError(f"{path}: no ranking entry for effect {name!r}")
+    if not isinstance(rows[0].get("params"), dict) or not rows[0].get("place"):
+        raise SensfwError(f"{path}: the entry for {name!r} lacks 'params' or 'place'")
+    return rows[0]["params"], rows[0]["place"]
+
+
+@app.command()
+@_user_errors
+def augment(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    effect: Annotated[str, typer.Option(help="effect to add, NAME[@PLACE]")],
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
+    start_from: Annotated[Path | None, typer.Option(
+        help="diagnose.json: start from the values diagnose found for this effect")] = None,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
+) -> None:
+    """Add a physical effect at its place, calibrate it with the base parameters, write the
+    augmented study and the error trajectory per level."""
+    from ..measure import augment as augment_module
+    from ..measure.session import load_measurements
+    from ..plugins import effects
+    from ..report.diagnosis import write_augment_report
+    from ..study import Study
+    from ..studyfile import add_effect, set_calibration
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    name, _, attach = effect.partition("@")
+    start = None
+    if start_from is not None:
+        start, attach = _diagnosed_values(start_from, name, attach)
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
+        result = augment_module.augment(study, meas, runner, name, attach or None,
+                                        start=start,
+                                        log=lambda s: console.print(f"[cyan]{s}"))
+    declared = {p.name: p for p in effects.get(name)().parameters()}
+    calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
+                  for k, v in result["params"].items()}
+    for k, v in result.get("base_parameters", {}).items():
+        p = study.parameters[k]
+        if v != p.nominal:
+            calibrated[k] = {"min": p.min, "nominal": float(v), "max": p.max}
+    jointly = f" jointly with {', '.join(result['variables'])}" if result.get("variables") \
+        else ""
+    note = (f"[augmented with {name}@{result['attach']}, calibrated{jointly} against "
+            f"{', '.join(m.file for m in meas)}]")
+    text = add_effect(study_file.read_text(encoding="utf-8"), name, result["attach"],
+                      calibrated, note)
+    if result.get("variables"):
+        text = set_calibration(text, result["variables"])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "study.toml").write_text(text, encoding="utf-8")
+    Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
+    comps = result.pop("_comparisons", None)
+    _json(out_dir / "augment.json", result)
+    write_augment_report(study, result, out_dir / "report.html", comps)
+    for t in result["trajectory"]:
+        per = t.get("error_per_level") or []
+        levels = ", ".join(f"{e:.2f}" for e in per)
+        out.print(f"  {t['step']:20s} error {t['error']:.3f} dB" +
+                  (f" (per level: {levels})" if len(per) > 1 else ""))
+    out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
+
+

@@ -1,0 +1,82 @@
+"""Add the missing effect at its place and calibrate it jointly with the base parameters: the
+augmented model and the error trajectory per level, nominal model -> base parameters
+recalibrated -> effect added (its nominal values) -> jointly calibrated."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+from ..errors import SensfwError
+from ..plugins import effects as effect_registry
+from ..runs import Runner
+from ..study import Study
+from .calibrate import Coordinates, Evaluation, calibrate
+from .diagnose import Hypothesis, Log, _calibrate_candidate, _fill, _screen, calibration_variables
+from .evaluate import Evaluator
+from .io import Measurement
+from .synthetic import model_with_effects
+
+
+def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, effect: str,
+            attach: str | None = None, start: Mapping[str, float] | None = None,
+            budget: int = 200, log: Log = lambda s: None) -> dict:
+    """Calibrate ``effect`` at ``attach`` (default: its preferred place) jointly with the
+    study's calibration variables. ``start`` (e.g. the values :func:`diagnose` found: base
+    variables and effect parameters) replaces the screening of the effect's probes."""
+    eff = effect_registry.get(effect)(attach=attach)
+    model_with_effects(study, [eff])  # resolves (and checks) where it attaches
+    names, source = calibration_variables(study, runner, log)
+    space = study.calibration_space(names)
+    ev = Evaluator(study, measurements, runner, space)
+    base = Coordinates.of(space)
+    nominal = space.nominal_row()
+    (nominal_cmp,) = ev.comparisons([ev.variant(None, nominal)], "nominal model")
+    if nominal_cmp is None:
+        raise SensfwError("the study's model failed at the measured level(s)")
+    log(f"recalibrating the base variables {', '.join(names)} ({source})")
+    h0 = Hypothesis(None, "", base)
+    h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "base calibration"), base,
+                       Evaluation(nominal, ev.weighted(nominal_cmp)), budget=budget // 3,
+                       log=log)
+    h = Hypothesis(eff, eff.attach, Coordinates(base.axes + Coordinates.of(
+        None, eff.parameters()).axes))
+    added = {**h0.fit.values, **{p.name: p.nominal for p in eff.parameters()}}
+    if start is not None:
+        want = set(h.coords.names)
+        missing = sorted(want - set(start))
+        if missing:
+            raise SensfwError(f"start values for {effect} lack {missing}")
+        first = {k: float(start[k]) for k in want}
+        (w,) = ev.evaluate(h.spec, [first], f"{effect} start")
+        h.screen_best = min([Evaluation(first, w),
+                             Evaluation({**h0.fit.values, **_fill(eff)}, h0.fit.best.w)],
+                            key=lambda e: e.chi2)
+    else:
+        (h0_cmp,) = ev.comparisons([ev.variant(None, h0.fit.values)], "base recalibrated")
+        _screen(ev, h0, [h], ev.output_comparisons(h0_cmp), log)
+    log(f"calibrating {h.name} jointly with {', '.join(names)}")
+    _calibrate_candidate(ev, h0, h, budget // 2, log)
+    steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),
+             ("effect added", h.spec, added), ("jointly calibrated", h.spec, h.fit.values)]
+    comps = {}
+    trajectory = []
+    for label, spec, values in steps:
+        (c,) = ev.comparisons([ev.variant(spec, values)], label)
+        comps[label] = ev.output_comparisons(c)
+        trajectory.append({"step": label, "error": ev.rms_db(c),
+                           "error_per_level": ev.rms_db_per_level(c),
+                           "levels": [m.level for m in measurements],
+                           "params": dict(values)})
+    own = {p.name for p in eff.parameters()}
+    summary = h.fit.summary()
+    return {"effect": effect, "attach": eff.attach, "variables": names, "channels": ev.channels,
+            "variables_from": source,
+            "params": {k: v for k, v in h.fit.values.items() if k in own},
+            "base": {k: v for k, v in h.fit.values.items() if k not in own},
+            "base_parameters": space.to_parameters(
+                {k: v for k, v in h.fit.values.items() if k in names}),
+            "calibration": summary, "notes": h.notes, "trajectory": trajectory,
+            "n_simulations": ev.n_simulations,
+            "comparison": {k: [x.to_dict() for x in v] if v else None
+                           for k, v in comps.items()},
+            "_comparisons": comps}

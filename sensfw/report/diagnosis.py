@@ -1,0 +1,187 @@
+"""Reports of ``sensfw diagnose`` (which effect is missing, where, with what base parameters)
+and ``sensfw augment`` (the effect added and calibrated: the error falls, per level)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from .html import Page
+
+
+def _fmt(v) -> str:
+    return "" if v is None else f"{v:.4g}"
+
+
+def calibration_table(rows: list[dict]) -> pd.DataFrame:
+    """Calibrated values with their 95 % intervals and flags (bound, identifiability)."""
+    return pd.DataFrame([{
+        "parameter": r["name"], "unit": r["unit"], "nominal": _fmt(r["nominal"]),
+        "calibrated": _fmt(r["value"]),
+        "95 % interval": f"[{_fmt(r['interval'][0])}, {_fmt(r['interval'][1])}]",
+        "bounds": f"[{_fmt(r['bounds'][0])}, {_fmt(r['bounds'][1])}]",
+        "flags": "; ".join(r["flags"])} for r in rows]).set_index("parameter")
+
+
+def frf_levels(pairs: dict[str, list], title: str):
+    """Measured FRF of every level next to the models in ``pairs`` (label -> comparisons)."""
+    first = next(iter(pairs.values()))
+    n = len(first)
+    fig, axes = plt.subplots(1, n, figsize=(min(5.5 * n, 16), 4), squeeze=False)
+    styles = ["--", "-.", ":", (0, (5, 1))]
+    for i, ax in enumerate(axes[0]):
+        c0 = first[i]
+        ax.semilogx(c0.f, c0.db_measured, color="k", lw=1.5, label="measured")
+        for j, (label, comps) in enumerate(pairs.items()):
+            if comps is None:
+                continue
+            c = comps[i]
+            ax.semilogx(c.f, c.db_model, lw=1.1, ls=styles[j % len(styles)], label=label)
+        ax.set_title(f"level {c0.level:.3g} {c0.unit}")
+        ax.set_xlabel("frequency (Hz)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0][0].set_ylabel("|H| (dB, 1/24-octave smoothed)")
+    axes[0][0].legend(fontsize=7)
+    fig.suptitle(title)
+    return fig
+
+
+def resonance_levels(pairs: dict[str, list]):
+    """Frequency of the strongest measured resonances against level, measured and each
+    model's nearest peak: the amplitude dependence the winner must reproduce."""
+    first = next(iter(pairs.values()))
+    levels = [c.level for c in first]
+    top = sorted(first[0].peaks_measured, key=lambda p: -p["prominence_db"])[:3]
+    fig, ax = plt.subplots(figsize=(7.5, 3.8))
+    colors = plt.cm.tab10(np.arange(10))
+
+    def track(comps, which: str, f_ref: float) -> list[float]:
+        out = []
+        for c in comps:
+            peaks = c.peaks_measured if which == "measured" else c.peaks_model
+            near = [p["frequency"] for p in peaks if abs(np.log(p["frequency"] / f_ref)) < 0.15]
+            out.append(min(near, key=lambda f: abs(f - f_ref)) if near else np.nan)
+        return out
+
+    for k, ref in enumerate(top):
+        f_ref = ref["frequency"]
+        ax.plot(levels, track(first, "measured", f_ref), "o-", color=colors[k], lw=2,
+                label=f"measured ~{f_ref:.0f} Hz")
+        for j, (label, comps) in enumerate(pairs.items()):
+            if comps is not None:
+                ax.plot(levels, track(comps, "model", f_ref), ls="--:"[j % 2], marker="x",
+                        color=colors[k], lw=1, label=label if k == 0 else None)
+    ax.set_xscale("log")
+    ax.set_xlabel("excitation level")
+    ax.set_ylabel("resonance frequency (Hz)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("Amplitude dependence: resonances against level")
+    return fig
+
+
+def write_diagnose_report(study, result, path) -> Path:
+    """``result`` is a :class:`sensfw.measure.diagnose.DiagnoseResult`."""
+    page = Page(f"sensfw: which physical effect is missing? ({study.name})",
+                f"verdict: {result.verdict} — {result.n_simulations} simulations")
+    page.p(f"Verdict: {result.verdict}. {result.reason}.", "ok" if result.verdict != "none"
+           else "note")
+    page.p("Every hypothesis recalibrates the base parameters "
+           f"({', '.join(result.variables)}, from {result.variables_from}): 'parameters' "
+           "recalibrates them alone; each candidate effect is calibrated jointly with them, "
+           "starting where it vanishes, so it can only end better. The residuals are the "
+           "dB differences per one-third-octave band (and THD) divided by their standard "
+           "errors from the measurement's own noise; chi2 is their sum of squares, BIC = "
+           "chi2 + k ln n. With several levels each is also judged on levels it was not "
+           "calibrated on (held-out chi2 per entry).")
+    page.h2("Base parameters recalibrated (hypothesis 'parameters')")
+    h0 = result.rows[0]
+    page.p(f"FRF error: nominal model {result.errors['nominal']:.2f} dB, recalibrated "
+           f"{result.errors['parameters']:.2f} dB (chi2 {h0['chi2']:.1f} for "
+           f"{result.n_entries} entries; "
+           + ("the noise explains what is left" if h0["fits_noise"] else
+              "more than the noise explains") + ").")
+    page.table(calibration_table(h0["calibration"]))
+    page.h2("Candidates")
+    if result.signature_classes:
+        page.p("Signature classes of the discrepancy across levels: "
+               + ", ".join(sorted(result.signature_classes)) + " (candidates whose "
+               "signatures do not match were left out).")
+    rows = [{"hypothesis": r["hypothesis"], "k": r["k"],
+             "chi2/entry": r["chi2_per_entry"], "ΔBIC": r.get("delta_bic", 0.0),
+             "held-out chi2/entry": r["heldout_chi2_per_entry"],
+             "effect values": ", ".join(
+                 f"{c['name']}={c['value']:.4g}" + (f" ({'; '.join(c['flags'])})"
+                                                    if c["flags"] else "")
+                 for c in r["calibration"] if c["name"] not in result.variables),
+             "notes": "; ".join(r["notes"])} for r in result.rows]
+    frame = pd.DataFrame(rows).set_index("hypothesis")
+    page.table(frame, highlight=pd.Series([r["hypothesis"] == result.verdict
+                                           for r in result.rows]))
+    fig, ax = plt.subplots(figsize=(10, 3.6))
+    x = np.arange(len(rows))
+    ax.bar(x - 0.2, [r["chi2/entry"] for r in rows], 0.4, label="calibrated (all levels)")
+    held = [r["held-out chi2/entry"] for r in rows]
+    if any(h is not None for h in held):
+        ax.bar(x + 0.2, [h or 0 for h in held], 0.4, label="held-out levels")
+    ax.axhline(1.0, color="k", lw=0.8, ls="--", label="noise alone")
+    ax.set_xticks(x, [r["hypothesis"] for r in rows], rotation=25, fontsize=7, ha="right")
+    ax.set_yscale("log")
+    ax.set_ylabel("chi2 per entry")
+    ax.legend(fontsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    page.figure(fig, "Each hypothesis after calibration (1 = what the noise alone leaves).")
+    win = next((r for r in result.rows if r["hypothesis"] == result.verdict
+                and r["effect"] is not None), None)
+    if win is not None:
+        page.h2(f"The winner: {win['hypothesis']}")
+        page.table(calibration_table(win["calibration"]))
+    pairs = {"nominal model": result.nominal, "parameters recalibrated": result.calibrated}
+    if result.best is not None:
+        pairs[result.verdict] = result.best
+    page.figure(frf_levels(pairs, "FRF per level"), "Measured (black) against the models.")
+    if len(result.nominal) >= 2:
+        page.figure(resonance_levels({k: v for k, v in pairs.items() if k != "nominal model"}),
+                    "Resonance frequencies against level: measured and models.")
+    return page.write(path)
+
+
+def write_augment_report(study, result: dict, path, comparisons: dict | None = None) -> Path:
+    page = Page(f"sensfw: model augmented with {result['effect']}@{result['attach']} "
+                f"({study.name})", f"{result['n_simulations']} simulations")
+    tr = result["trajectory"]
+    levels = tr[0]["levels"]
+    fig, ax = plt.subplots(figsize=(9, 3.8))
+    width = 0.8 / len(tr)
+    for i, t in enumerate(tr):
+        per = t["error_per_level"] or [t["error"]]
+        x = np.arange(len(per)) + (i - (len(tr) - 1) / 2) * width
+        ax.bar(x, per, width, label=t["step"])
+        for xi, e in zip(x, per, strict=True):
+            ax.text(xi, e, f"{e:.2f}", ha="center", va="bottom", fontsize=7)
+    ax.set_xticks(np.arange(len(levels)), [f"{lv:.3g}" for lv in levels])
+    ax.set_xlabel("level")
+    ax.set_ylabel("FRF error (dB RMS)")
+    ax.set_title("The error falls, level by level")
+    ax.legend(fontsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    page.figure(fig, "Error trajectory per level: nominal model, base parameters "
+                     "recalibrated, the effect added at its nominal values, jointly "
+                     "calibrated.")
+    page.table(pd.DataFrame([{"step": t["step"], "error (dB RMS)": t["error"]}
+                             for t in tr]).set_index("step"))
+    page.h2("Calibrated values")
+    page.table(calibration_table(result["calibration"]))
+    for n in result.get("notes", []):
+        page.note(n)
+    if comparisons:
+        page.figure(frf_levels({k: v for k, v in comparisons.items() if v is not None},
+                               "FRF per level"), "Measured (black) against each step.")
+        if len(levels) >= 2:
+            page.figure(resonance_levels({k: v for k, v in comparisons.items()
+                                          if k != "nominal model" and v is not None}),
+                        "Resonance frequencies against level.")
+    return page.write(path)
