@@ -6,8 +6,8 @@ Gauss-Newton method that uses the vector (not just its norm) needs far fewer of 
 scalar surrogate or Bayesian optimisation over the same space: a forward-difference
 Jacobian costs ``d`` simulations, run in parallel, and a few iterations converge where the
 discrepancy is smooth (Nocedal & Wright 2006, Ch. 10; Moré 1978 for the trust-region
-Levenberg-Marquardt). Each iteration tries two damping values at once (parallel) and
-accepts only a step that lowers ``chi2``, so the result is never worse than the start.
+Levenberg-Marquardt). Each step tries two damping values at once (parallel) and accepts
+only a step that lowers ``chi2``, so the result is never worse than the start.
 
 Parameters are coded to ``[-1, 1]`` (logarithmically for ranges of a factor 10 or more).
 The difference step is a few per cent of the range, not an infinitesimal: where stick-slip
@@ -133,7 +133,10 @@ class Fit:
         n, k = J.shape
         s2 = max(1.0, self.chi2 / max(n - k, 1))
         A = J.T @ J
-        return s2 * np.linalg.pinv(A, rcond=1e-10)
+        # a direction the data do not see (a zero column) gets a huge variance, not the
+        # zero a pseudo-inverse would give it
+        eps = 1e-9 * np.trace(A) / k + 1e-12
+        return s2 * np.linalg.inv(A + eps * np.eye(k))
 
     def summary(self) -> list[dict]:
         """Per axis: value, 95 % interval, coded standard deviation and flags."""
@@ -161,19 +164,25 @@ def _jacobian_points(z: np.ndarray, h: float) -> tuple[list[np.ndarray], np.ndar
 
 
 def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
-              fixed: Mapping[str, float] | None = None, max_iter: int = 8,
+              fixed: Mapping[str, float] | None = None, max_iter: int = 12,
               step: float = 0.05, budget: int | None = None, tol: float = 1e-3,
               log: Callable[[str], None] = lambda s: None) -> Fit:
     """Minimise ``chi2`` over ``coords`` from ``start`` (an evaluated point: its ``values``
     hold every axis, plus any ``fixed`` values passed through unchanged). ``evaluate`` maps
     a list of value dicts to weighted residual vectors (one batch of parallel runs).
-    ``budget`` caps the number of simulations."""
+    ``budget`` caps the number of simulations; ``max_iter`` the number of Jacobians.
+
+    A Jacobian (``d`` runs) is computed at each new best point; then pairs of damped
+    Gauss-Newton steps (two damping values, run together) are tried until one lowers
+    ``chi2`` — a failed pair costs two runs, not a new Jacobian — with the damping raised a
+    hundredfold after each failed pair (Levenberg 1944, Marquardt 1963). Four failed pairs
+    in a row, or two iterations gaining less than ``tol`` (relative), end the search."""
     fixed = dict(fixed or {})
     fit = Fit(coords=coords, best=start, jacobian=None, evaluations=[start])
     if len(coords) == 0 or start.w is None:
         return fit
     used = 0
-    lam = 1e-2
+    d = len(coords)
 
     def run(zs: list[np.ndarray]) -> list[Evaluation]:
         nonlocal used
@@ -184,46 +193,51 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
         fit.evaluations.extend(out)
         return out
 
-    stalls = 0
+    def affordable(n: int) -> bool:
+        return budget is None or used + n <= budget
+
+    lam, slow = 1e-3, 0
     for it in range(max_iter):
-        d = len(coords)
-        if budget is not None and used + d + 2 > budget:
+        if not affordable(d + 2):
             log(f"  budget of {budget} simulations reached")
             break
-        z = coords.code(fit.best.values)
-        w = fit.best.w
+        z, w = coords.code(fit.best.values), fit.best.w
         pts, h = _jacobian_points(z, step)
         cols = run(pts)
         J = np.column_stack([(c.w - w) / hi if c.w is not None else np.zeros_like(w)
                              for c, hi in zip(cols, h, strict=True)])
         fit.jacobian = J
-        better = min(cols, key=lambda e: e.chi2)
+        fit.iterations = it + 1
         A, g = J.T @ J, J.T @ w
         scale = np.maximum(np.diag(A), 1e-12 * max(np.max(np.diag(A)), 1e-300))
-        trials = []
-        for mu in (lam, lam * 30):
-            s = -np.linalg.solve(A + mu * np.diag(scale) + 1e-12 * np.eye(d), g)
-            # trust region: at most half the coded range per iteration
-            norm = np.max(np.abs(s))
-            if norm > 1.0:
-                s = s / norm
-            trials.append(np.clip(z + s, -1, 1))
-        tried = run(trials)
-        cand = min([*tried, better], key=lambda e: e.chi2)
         old = fit.best.chi2
-        fit.iterations = it + 1
+        cand = min(cols, key=lambda e: e.chi2)  # a difference point may already be better
+        for _ in range(4):
+            if not affordable(2):
+                break
+            trials = []
+            for mu in (lam, lam * 10):
+                s = -np.linalg.solve(A + mu * np.diag(scale) + 1e-12 * np.eye(d), g)
+                norm = np.max(np.abs(s))
+                if norm > 1.0:  # at most half the coded range per step
+                    s = s / norm
+                trials.append(np.clip(z + s, -1, 1))
+            tried = run(trials)
+            best_trial = min(tried, key=lambda e: e.chi2)
+            if best_trial.chi2 < old:
+                lam = lam / 3 if best_trial is tried[0] else lam * 3
+                cand = min(best_trial, cand, key=lambda e: e.chi2)
+                break
+            lam *= 100
         if cand.chi2 < old:
             fit.best = cand
-            lam = lam / 3 if cand is tried[0] else lam * 3
             gain = (old - cand.chi2) / max(old, 1e-300)
             log(f"  iteration {it + 1}: chi2 {old:.4g} -> {cand.chi2:.4g}")
-            stalls = stalls + 1 if gain < tol else 0
+            slow = slow + 1 if gain < tol else 0
+            if slow >= 2:
+                break
         else:
-            lam *= 10
-            step = max(step / 2, 0.01)
-            stalls += 1
-            log(f"  iteration {it + 1}: no better point (chi2 {old:.4g}); smaller steps")
-        if stalls >= 2:
+            log(f"  iteration {it + 1}: no lower chi2 near {old:.4g}: converged")
             break
     return fit
 

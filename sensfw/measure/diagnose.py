@@ -143,7 +143,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     found = _signature_classes(h0_cmp)
     hyps = _hypotheses(study, candidates, found, base_coords, log)
     log(f"{len(hyps)} candidate(s) after the signature classes {sorted(found) or '(none)'}")
-    _screen(ev, h0, hyps, h0_cmp, log)
+    _screen(ev, h0, hyps, h0_cmp, log, nominal_values)
     ranked = sorted(hyps, key=lambda h: h.screen_chi2)
     chosen = [h for h in ranked[:refine] if h.screen_chi2 < h0.fit.chi2 - 2.0]
     spent = ev.n_simulations
@@ -259,28 +259,37 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
     return out
 
 
-def _screen(ev: Evaluator, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, log: Log
-            ) -> None:
-    """Each candidate at its probes from H0's point (the neutral values make it vanish). Its
-    score is the lowest chi2 it promises: the probe's own, or the linear prediction along
-    the probe's direction ``d = w_probe - w_0`` after the base variables have taken what
-    they can explain (``d`` projected out of the column space of H0's Jacobian), for up to
-    twice the probe's strength. Costs one simulation per probe."""
+def _screen(ev: Evaluator, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, log: Log,
+            nominal: Mapping[str, float] | None = None) -> None:
+    """Each candidate at its probes (the neutral values make it vanish), from H0's point and
+    from the nominal base values: H0 may have bent the base variables to mimic the missing
+    effect (a softer bearing for a heavier shaft), and from there the effect only helps
+    together with moving them back. The score is the lowest chi2 the candidate promises:
+    a probe's own, or the linear prediction along the probe's direction
+    ``d = w_probe - w_0`` from H0 after the base variables have taken what they can explain
+    (``d`` projected out of the column space of H0's Jacobian), for up to twice the probe's
+    strength. Costs one or two simulations per probe."""
     base = h0.fit.values
     w0 = h0.fit.best.w
     J = h0.fit.jacobian
     proj = (J @ np.linalg.pinv(J)) if J is not None and J.size else None
+    bases = [base] + ([dict(nominal)] if nominal is not None and any(
+        not math.isclose(nominal[k], base[k]) for k in nominal) else [])
     for h in hyps:  # one batch per hypothesis (its effect spec is part of every run)
-        points = [{**base, **_fill(h.effect), **probe} for probe in h.effect.probes(h0_cmp)]
+        probes = h.effect.probes(h0_cmp)
+        points = [{**b, **_fill(h.effect), **probe} for b in bases for probe in probes]
         ws = ev.evaluate(h.spec, points, f"screen {h.name}")
         best = Evaluation({**base, **_fill(h.effect)}, w0)
         score = h0.fit.chi2
-        for values, w in zip(points, ws, strict=True):
+        for i, (values, w) in enumerate(zip(points, ws, strict=True)):
             if w is None:
                 continue
             e = Evaluation(values, w)
             if e.chi2 < best.chi2:
                 best = e
+            score = min(score, e.chi2)
+            if i >= len(probes):  # from the nominal base: its own chi2 only
+                continue
             d = w - w0
             if proj is not None:
                 d = d - proj @ d
@@ -288,7 +297,6 @@ def _screen(ev: Evaluator, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             if dd > 0:
                 c = float(np.clip(-(w0 @ d) / dd, 0.0, 2.0))
                 score = min(score, float(np.sum((w0 + c * d) ** 2)))
-            score = min(score, e.chi2)
         h.screen_chi2, h.screen_best = score, best
         log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {score:.4g} (predicted)")
 
