@@ -6,6 +6,9 @@ a single-mode fit), a harmonic table (order amplitudes and their noise floor, dB
 difference), THD and the DC offset. Over the levels: the amplitude-dependence table and the
 signature classes of :mod:`sensfw.measure.signatures` (amplitude dependence is the
 fingerprint of contact nonlinearity).
+
+(A little over the usual 400 lines: the per-level noise estimates (band errors, harmonic
+floor, DC standard error) share one local fit and belong with the numbers they qualify.)
 """
 
 from __future__ import annotations

@@ -27,8 +27,11 @@ noise alone produces (see there).
 
 :func:`amplitude_table` is the table; :func:`classes` the classes with their evidence;
 :func:`allows` tells whether an effect's declared ``signature_classes`` fit what was found
-(diagnosis uses it to prune its candidates); :func:`sentence` says it as a test engineer
+(diagnosis uses it to prune its candidates); :func:`sentences` say it as a test engineer
 would; :func:`amplitude_dependence` bundles all of it for ``compare.json``.
+
+(Longer than the project's usual 400 lines: the tracking, the classes and the sentences all
+read the one table structure built here; apart, each would need the others' internals.)
 """
 
 from __future__ import annotations
@@ -322,7 +325,8 @@ def _harmonic_differences(table: dict, th: dict) -> list[dict]:
     return out
 
 
-def classes(levels: Sequence, thresholds: dict | None = None) -> dict[str, dict]:
+def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None = None
+            ) -> dict[str, dict]:
     """Signature classes (:data:`~sensfw.effects.base.SIGNATURE_CLASSES`) of the
     discrepancy between measurement and model over several levels, each with its evidence.
 
@@ -346,13 +350,14 @@ def classes(levels: Sequence, thresholds: dict | None = None) -> dict[str, dict]
     * ``new_peak``: a measured resonance no model resonance pairs with, at least
       ``new_peak_prominence_db`` prominent.
 
-    Several classes may hold at once. Returns ``{class: evidence}``.
+    Several classes may hold at once. Returns ``{class: evidence}``. ``table``: the
+    :func:`amplitude_table` of ``levels`` if already built.
     """
     th = {**THRESHOLDS, **(thresholds or {})}
     levels = sorted(levels, key=lambda c: c.level)
     if len({c.level for c in levels}) < 2:
         return {}
-    table = amplitude_table(levels)
+    table = table or amplitude_table(levels)
     found: dict[str, dict] = {}
     trends = _trends(table, th)
     soft = [t for t in trends if t["shift_trend_pct"] < -th["shift_trend_pct"]]
@@ -464,7 +469,7 @@ def _resonance_sentence(cls: str, t: dict, unit: str, th: dict) -> str:
         return f"{abs(v):.1f} % {'above' if v >= 0 else 'below'}"
 
     steady = t["damping_trend"] is None or abs(t["damping_trend"]) <= th["damping_trend"]
-    if not (d[0] and d[-1]):
+    if not (d[0] and d[-1]) or t["method"] != "mode fit":  # half-power damping: biased
         damp = ""
     elif steady:
         damp = f"its damping stays {np.exp(np.mean(np.log(d))):.1f}x the model's"
@@ -513,7 +518,7 @@ def sentences(found: dict, table: dict, thresholds: dict | None = None) -> list[
             if ev["harmonics"]:
                 h = max(ev["harmonics"], key=lambda h: h["difference_db"])
                 odd = "" if h["odd_difference_db"] is None else \
-                    f", H3/H1 by {h['odd_difference_db']:+.1f} dB"
+                    f" (H3/H1 {h['odd_difference_db']:+.1f} dB)"
                 parts.append(f"H2/H1 is {h['difference_db']:.1f} dB above the model's at "
                              f"{_lv(h['level'], unit)}{odd}")
             if ev["dc"]:
@@ -539,7 +544,7 @@ def amplitude_dependence(levels: Sequence, thresholds: dict | None = None) -> di
     levels = sorted(levels, key=lambda c: c.level)
     th = {**THRESHOLDS, **(thresholds or {})}
     table = amplitude_table(levels)
-    found = classes(levels, th)
+    found = classes(levels, th, table)
     out = {"levels": table["levels"], "table": table, "classes": found,
            "sentences": sentences(found, table, th), "thresholds": th}
     lo, hi = levels[0], levels[-1]

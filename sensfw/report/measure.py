@@ -96,6 +96,15 @@ def _plotted_tracks(table: dict, min_prominence: float = 10.0, most: int = 4) ->
     return [r for _, r in sorted(out, key=lambda x: -x[0])[:most]]
 
 
+def _level_ticks(ax, levels) -> None:
+    """The measured levels as the ticks of a log axis, written plainly."""
+    from matplotlib.ticker import NullFormatter, NullLocator
+
+    ax.set_xticks(levels, [f"{x:g}" for x in levels])
+    ax.xaxis.set_minor_locator(NullLocator())
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
 def amplitude_plot(amplitude: dict, unit: str = "N"):
     """Resonance frequency and damping ratio against level, measured (solid) and model
     (dashed), one row per prominent resonance; harmonic ratios H2/H1, H3/H1 (dB) against
@@ -129,6 +138,7 @@ def amplitude_plot(amplitude: dict, unit: str = "N"):
             elif vals:
                 ax.set_ylim(0, 1.2 * max(vals))
             ax.set_ylabel(label, fontsize=8)
+            _level_ticks(ax, table["levels"])
             ax.set_title(f"{r['id']}: {r['frequency_hz']:.0f} Hz ({r['kind']})", fontsize=9)
             ax.grid(True, which="both", alpha=0.3)
             ax.tick_params(labelsize=8)
@@ -144,6 +154,7 @@ def amplitude_plot(amplitude: dict, unit: str = "N"):
         ax.semilogx(lv, db("_measured"), "o-", color=c, label=f"H{k}/H1 measured")
         ax.semilogx(lv, db("_model"), "s--", color=c, mfc="none", label=f"H{k}/H1 model")
         ax.semilogx(lv, db("_floor"), ":", color=c, lw=1, label=f"H{k}/H1 noise floor")
+    _level_ticks(ax, lv)
     ax.set_xlabel(f"excitation level ({unit})")
     ax.set_ylabel("P_k / P_1 (dB)")
     ax.set_title("Harmonic ratios", fontsize=9)
@@ -162,7 +173,7 @@ def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
                 continue
             res.append({"resonance": f"{r['id']} ({r['kind']})", "level": x["level"],
                         "measured Hz": x["measured_hz"], "model Hz": x["model_hz"],
-                        "shift %": x["shift_pct"], "measured ζ": x["measured_damping"],
+                        "measured vs model %": x["shift_pct"], "measured ζ": x["measured_damping"],
                         "model ζ": x["model_damping"], "ζ ratio": x["damping_ratio"],
                         "method": x["method"]})
     harm = []
