@@ -542,6 +542,8 @@ def amplitude_dependence(levels: Sequence, thresholds: dict | None = None) -> di
     (:func:`amplitude_table`), the classes with their evidence (:func:`classes`), the
     sentences, the THD growth and the thresholds used."""
     levels = sorted(levels, key=lambda c: c.level)
+    if not levels:
+        raise ValueError("amplitude_dependence needs at least one level")
     th = {**THRESHOLDS, **(thresholds or {})}
     table = amplitude_table(levels)
     found = classes(levels, th, table)
