@@ -1,10 +1,14 @@
 """Model against measurement: where and how they differ ("see where it fails").
 
 For one excitation level: FRF error in dB (overall RMS and per one-third-octave band),
-a resonance table (model vs measured frequency, shift, half-power damping ratio), a harmonic
-table (order amplitudes, dB difference) and THD. For several levels: how resonance
-frequencies and THD move with level, measured and simulated (amplitude dependence is the
+a resonance table (model vs measured frequency, shift, half-power damping ratio, refined by
+a single-mode fit), a harmonic table (order amplitudes and their noise floor, dB
+difference), THD and the DC offset. Over the levels: the amplitude-dependence table and the
+signature classes of :mod:`sensfw.measure.signatures` (amplitude dependence is the
 fingerprint of contact nonlinearity).
+
+(A little over the usual 400 lines: the per-level noise estimates (band errors, harmonic
+floor, DC standard error) share one local fit and belong with the numbers they qualify.)
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from scipy.signal import find_peaks
 
 from ..models.base import Signals
 from ..signal import frf, harmonic_amplitudes, octave_smooth
+from .signatures import amplitude_dependence
 
 #: FRF settings of every comparison: Hv over the whole record, smoothed for the metrics
 SMOOTH = 24  # 1/24 octave
@@ -33,11 +38,15 @@ def third_octave_bands(fmin: float, fmax: float) -> list[tuple[float, float, flo
     return out
 
 
-def frf_db(sig: Signals, channel: str, band: tuple[float, float], smooth: int = SMOOTH):
-    """(f, dB magnitude) of the Hv FRF, 1/``smooth``-octave smoothed, inside ``band``."""
+def frf_db(sig: Signals, channel: str, band: tuple[float, float], smooth: int = SMOOTH,
+           complex_frf: bool = False):
+    """(f, dB magnitude) of the Hv FRF, 1/``smooth``-octave smoothed, inside ``band``
+    (with ``complex_frf`` also the unsmoothed complex FRF on the same lines)."""
     f, H = frf(sig.force, sig.channel(channel), sig.fs, estimator="Hv")
     mag = octave_smooth(f, H, smooth)
     sel = (f >= band[0]) & (f <= band[1]) & (mag > 0)
+    if complex_frf:
+        return f[sel], 20 * np.log10(mag[sel]), H[sel]
     return f[sel], 20 * np.log10(mag[sel])
 
 
@@ -57,22 +66,16 @@ def band_frf_db(sig: Signals, channel: str, bands) -> np.ndarray:
     return np.array(out)
 
 
-def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.ndarray:
-    """Relative standard error of each band's H1 (:func:`band_frf_db`) from the output
-    noise of the record itself.
-
-    With ``X = H P + N`` the band estimate ``sum conj(P) X / sum |P|^2`` has the relative
-    error ``sqrt(sigma_N^2 / sum_b |H P|^2)``. The per-bin noise variance ``sigma_N^2`` is
-    estimated from the residual of a local fit ``X_j ~ (a_k + b_k (j - k)) P_j`` over the
-    ``2 half_width + 1`` bins around each bin ``k`` (an FRF that varies linearly across the
-    window, so a resonance of a few per cent damping leaves little structure in the residual),
-    corrected for the two fitted degrees of freedom. Bands whose error is large are
-    noise-limited: the measurement cannot say there how wrong the model is."""
+def _local_fit(sig: Signals, channel: str, half_width: int = 4):
+    """(f, P, H_k, per-bin residual power) of the local fit of :func:`band_noise`: ``X_j ~
+    (a_k + b_k (j - k)) P_j`` over the ``2 half_width + 1`` bins around each bin ``k`` (an
+    FRF that varies linearly across the window, so a resonance of a few per cent damping
+    leaves little structure in the residual), ``H_k = a_k``, the residual corrected for the
+    two fitted degrees of freedom."""
     P = np.fft.rfft(sig.force)
     X = np.fft.rfft(sig.channel(channel))
     f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
-    m = half_width
-    j = np.arange(-m, m + 1, dtype=float)
+    j = np.arange(-half_width, half_width + 1, dtype=float)
     pp = np.abs(P) ** 2
     px = np.conj(P) * X
 
@@ -83,12 +86,26 @@ def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.nda
     t0, t1 = local(px, np.ones_like(j)), local(px, j)
     det = s0 * s2 - s1 * s1
     ok = det > 1e-12 * np.maximum(s0 * s2, 1e-300)
-    a = np.divide(t0 * s2 - t1 * s1, det, out=np.zeros_like(t0), where=ok)
-    resid = np.abs(X - a * P) ** 2 * (len(j) / (len(j) - 2))
+    Hk = np.divide(t0 * s2 - t1 * s1, det, out=np.zeros_like(t0), where=ok)
+    resid = np.abs(X - Hk * P) ** 2 * (len(j) / (len(j) - 2))
+    return f, P, Hk, resid
+
+
+def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.ndarray:
+    """Relative standard error of each band's H1 (:func:`band_frf_db`) from the output
+    noise of the record itself.
+
+    With ``X = H P + N`` the band estimate ``sum conj(P) X / sum |P|^2`` has the relative
+    error ``sqrt(sigma_N^2 / sum_b |H P|^2)``. The per-bin noise variance ``sigma_N^2`` is
+    estimated from the residual of the local fit of :func:`_local_fit`. Bands whose error is
+    large are noise-limited: the measurement cannot say there how wrong the model is (and
+    a nonlinear structure's distortion counts as noise here: :func:`compare_level` takes the
+    model's own share out)."""
+    f, P, Hk, resid = _local_fit(sig, channel, half_width)
     out = []
     for lo, _, hi in bands:
         sel = (f >= lo) & (f < hi)
-        signal = np.sum(np.abs(a[sel] * P[sel]) ** 2)
+        signal = np.sum(np.abs(Hk[sel] * P[sel]) ** 2)
         noise = np.sum(resid[sel]) / max(int(sel.sum()), 1)  # per-bin variance
         out.append(float(np.sqrt(noise / signal)) if signal > 0 else np.inf)
     return np.array(out)
@@ -119,6 +136,38 @@ def resonances(f: np.ndarray, db: np.ndarray, prominence: float = 6.0,
             zeta = float((f2 - f1) / (2 * f[i]))
         out.append({"frequency": float(f[i]), "peak_db": float(db[i]),
                     "prominence_db": float(prom), "damping_ratio": zeta})
+    return out
+
+
+#: a single-mode fit replaces the half-power values when it explains this fraction of the
+#: complex FRF's variance near the peak (below it the peak is no clean mode: a distorted
+#: nonlinear response, two modes within a few bandwidths)
+MIN_FIT_R2 = 0.9
+
+
+def fit_resonances(f: np.ndarray, H: np.ndarray, peaks: list[dict],
+                   min_r2: float = MIN_FIT_R2) -> list[dict]:
+    """Each peak of :func:`resonances` with a single-mode fit of the unsmoothed complex FRF
+    ``H`` (:func:`sensfw.signal.modal.sdof_fit`): ``fit_frequency``, ``fit_damping`` and
+    ``fit_r2``, or ``None`` where the fit fails or explains less than ``min_r2``. The
+    half-power values stay in ``frequency`` and ``damping_ratio``; whoever compares two
+    FRFs uses the fitted values only where both sides have them (the half-power damping of
+    a 1/24-octave smoothed FRF is biased upwards, see :mod:`sensfw.signal.modal`)."""
+    from ..errors import SignalError
+    from ..signal.modal import sdof_fit
+
+    out = []
+    for p in peaks:
+        fit = None
+        try:
+            fit = sdof_fit(f, H, p["frequency"], p["damping_ratio"] or 0.02)
+        except SignalError:
+            pass
+        ok = fit is not None and fit.r2 >= min_r2 and \
+            abs(np.log(fit.frequency / p["frequency"])) < 0.05
+        out.append({**p, "fit_frequency": fit.frequency if ok else None,
+                    "fit_damping": fit.damping_ratio if ok else None,
+                    "fit_r2": fit.r2 if fit is not None else None})
     return out
 
 
@@ -173,10 +222,61 @@ def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3)
     return out
 
 
+def harmonic_floor(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3),
+                   seed: int = 0) -> dict[int, float]:
+    """Noise floor of each ratio ``P_k / P_1`` of :func:`harmonics`: the order amplitude
+    that the record's output noise alone gives at order ``k``, over the same part of the
+    sweep, divided by that part's ``P_1``.
+
+    The noise is white with the standard deviation of :func:`noise_sigma`; its order
+    amplitude is computed on a realisation of it (the order spectrum averages over frames,
+    so one realisation varies by a few per cent). Noise adds in power, ``P_k^2 ~ P_k,true^2
+    + P_k,noise^2``: a measured ratio within a few dB of its floor says little about the
+    harmonic. (The spectrum between the orders is no noise estimate for a fast sweep: the
+    ring-down of each resonance smears across orders there.)"""
+    if sig.f_inst is None:
+        return {}
+    sigma = noise_sigma(sig, channel)
+    s = sig.sweep()
+    x, fr = s.channel(channel), np.asarray(s.f_inst, float)
+    noise = sigma * np.random.default_rng(seed).standard_normal(len(x))
+    out = {}
+    for k in orders:
+        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
+        if n < 0.1 * len(fr):
+            continue
+        p1 = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1,))[1]
+        pk = harmonic_amplitudes(noise[:n], s.fs, fr[:n], harmonics=(k,))[k]
+        if p1 > 0:
+            out[k] = float(pk / p1)
+    return out
+
+
 def dc_offset(sig: Signals, channel: str) -> float:
     """Mean of the output over the sweep (an asymmetric contact or a preload can shift it;
     for an accelerometer mostly the sensor's own offset)."""
     return float(np.mean(sig.sweep().channel(channel)))
+
+
+def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
+    """Standard deviation of the output noise of a record (assumed white), from the
+    residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n sigma^2``,
+    read off a low quantile of the residual power over the bins (the power of complex
+    Gaussian noise is exponential, so its ``q``-quantile is ``-ln(1 - q)`` times its mean).
+
+    Exact for a linear response; harmonic distortion of a swept record does not follow
+    the local fit either (its phase turns by ~1 rad per line relative to the force's), so a
+    strongly nonlinear record gives an upper bound: the low quantile keeps to the lines
+    where the distortion is weakest. 0 for a noise-free linear record."""
+    _, _, _, resid = _local_fit(sig, channel)
+    q = float(np.quantile(resid[1:], quantile)) / -np.log1p(-quantile)
+    return float(np.sqrt(q / len(sig.force)))
+
+
+def dc_standard_error(sig: Signals, channel: str) -> float:
+    """Standard error of :func:`dc_offset` from the output noise: ``sigma / sqrt(n)`` for
+    the mean over the sweep's ``n`` samples (:func:`noise_sigma`)."""
+    return noise_sigma(sig, channel) / float(np.sqrt(len(sig.sweep().force)))
 
 
 @dataclass
@@ -197,6 +297,7 @@ class LevelComparison:
     unit: str = "N"  # of the excitation channel (the FRF's denominator)
     dc_model: float = 0.0
     dc_measured: float = 0.0
+    dc_standard_error: float = 0.0  # of dc_measured, from the record's noise
     peaks_model: list[dict] = field(default_factory=list)
     peaks_measured: list[dict] = field(default_factory=list)
 
@@ -247,14 +348,15 @@ class LevelComparison:
                 "thd": {"model": self.thd_model, "measured": self.thd_measured,
                         "difference_db": 20 * np.log10(self.thd_model / self.thd_measured)
                         if self.thd_model and self.thd_measured else None},
-                "dc_offset": {"model": self.dc_model, "measured": self.dc_measured},
+                "dc_offset": {"model": self.dc_model, "measured": self.dc_measured,
+                              "standard_error": self.dc_standard_error},
                 "input_unit": self.unit, "notes": self.notes}
 
 
 def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[float, float],
                   level: float, file: str = "") -> LevelComparison:
-    f, dbm = frf_db(model, channel, band)
-    f2, dbx = frf_db(measured, channel, band)
+    f, dbm, Hm = frf_db(model, channel, band, complex_frf=True)
+    f2, dbx, Hx = frf_db(measured, channel, band, complex_frf=True)
     if len(f) != len(f2) or not np.allclose(f, f2):
         raise ValueError("model and measurement have different frequency axes; align first")
     bands = []
@@ -275,14 +377,17 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
                       # standard error in dB: ln|1 + e z| ~ Re(e z), var e^2 / 2
                       "noise_db": float(20 / np.log(10) * e / np.sqrt(2))
                       if np.isfinite(e) else None})
-    pm, px = resonances(f, dbm), resonances(f, dbx)
+    pm = fit_resonances(f, Hm, resonances(f, dbm))
+    px = fit_resonances(f, Hx, resonances(f, dbx))
     res = match_resonances(pm, px)
     hm, hx = harmonics(model, channel), harmonics(measured, channel)
+    floor = harmonic_floor(measured, channel)
     rows = []
     for k in sorted(set(hm) & set(hx)):
         rows.append({"order": k, "model": hm[k], "measured": hx[k],
                      "model_ratio": hm[k] / hm[1] if hm.get(1) else None,
                      "measured_ratio": hx[k] / hx[1] if hx.get(1) else None,
+                     "measured_floor_ratio": floor.get(k),
                      "difference_db": float(20 * np.log10(hm[k] / hx[k]))
                      if hm[k] > 0 and hx[k] > 0 else None})
 
@@ -294,46 +399,10 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
                            bands=bands, resonances=res, harmonics=rows, thd_model=thd(hm),
                            thd_measured=thd(hx), unit=measured.units.get("force", "N"),
                            dc_model=dc_offset(model, channel),
-                           dc_measured=dc_offset(measured, channel), peaks_model=pm,
+                           dc_measured=dc_offset(measured, channel),
+                           dc_standard_error=dc_standard_error(measured, channel),
+                           peaks_model=pm,
                            peaks_measured=px)
-
-
-def amplitude_dependence(levels: list[LevelComparison]) -> dict | None:
-    """How the main resonances and THD move from the lowest to the highest level."""
-    if len(levels) < 2:
-        return None
-    lo, hi = min(levels, key=lambda c: c.level), max(levels, key=lambda c: c.level)
-
-    def main_peaks(c: LevelComparison, which: str):
-        db = c.db_measured if which == "measured" else c.db_model
-        return sorted(resonances(c.f, db), key=lambda r: -r["prominence_db"])[:4]
-
-    shifts = {}
-    for which in ("measured", "model"):
-        pl, ph = main_peaks(lo, which), main_peaks(hi, which)
-        pairs = []
-        for a in pl:
-            near = [b for b in ph if abs(np.log(b["frequency"] / a["frequency"])) < 0.1]
-            if near:
-                b = min(near, key=lambda b: abs(b["frequency"] - a["frequency"]))
-                pairs.append({"low_level_hz": a["frequency"], "high_level_hz": b["frequency"],
-                              "shift_pct": 100 * (b["frequency"] / a["frequency"] - 1)})
-        shifts[which] = pairs
-    thd_ratio = {"measured": hi.thd_measured / lo.thd_measured if lo.thd_measured else None,
-                 "model": hi.thd_model / lo.thd_model if lo.thd_model else None}
-    level_ratio = hi.level / lo.level
-    measured_shift = max((abs(p["shift_pct"]) for p in shifts["measured"]), default=0.0)
-    verdict = []
-    if thd_ratio["measured"] and thd_ratio["measured"] > 1.3:
-        verdict.append(f"measured THD grows {thd_ratio['measured']:.2f}x for a "
-                       f"{level_ratio:.2f}x level: nonlinear")
-    if measured_shift > 1.0:
-        verdict.append(f"measured resonances move by up to {measured_shift:.1f} % with level: "
-                       "amplitude-dependent stiffness (contact, clearance, friction)")
-    if not verdict:
-        verdict.append("the measurement scales linearly between the levels")
-    return {"levels": [lo.level, hi.level], "resonance_shifts": shifts,
-            "thd_ratio": thd_ratio, "summary": verdict}
 
 
 @dataclass
@@ -344,7 +413,7 @@ class Comparison:
     output: str
     levels: list[LevelComparison]
     pairs: list[tuple[float, Signals, Signals]]  # (level, measured, model) signals
-    amplitude: dict | None
+    amplitude: dict | None  # :func:`sensfw.measure.signatures.amplitude_dependence`
     notes: list[str]
 
     def to_dict(self) -> dict:

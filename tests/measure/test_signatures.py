@@ -1,0 +1,446 @@
+"""Amplitude dependence of a measurement against its model (issue 13, item 3): the table,
+the signature classes of the discrepancy and the pruning of diagnosis candidates.
+
+Unit tests on hand-made comparisons whose answer is obvious, then the shipped shaft model
+with a hidden effect at a place and level where its physics acts (each choice explained in
+the test's docstring; the contact states quoted there come from displacement sensors at the
+places, and the modes from the model's linearisation, ``ShaftAssembly.linear_matrices``:
+620 Hz axial, 1508 Hz crankshaft rocking on the slide bearings (the main resonance of the
+crank_axial FRF), 4168 Hz driveshaft rocking on L1/L3).
+"""
+
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sensfw.effects.base import Effect
+from sensfw.measure.checks import prepare
+from sensfw.measure.compare import compare_measurements
+from sensfw.measure.io import Measurement
+from sensfw.measure.signatures import (
+    THRESHOLDS,
+    allows,
+    amplitude_dependence,
+    amplitude_table,
+    classes,
+    harmonic_images,
+    pair_tracks,
+    track,
+)
+from sensfw.measure.synthetic import Rig, synthesize
+from sensfw.runs import Runner, RunStore
+from sensfw.study import Study
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+# ---- hand-made comparisons -------------------------------------------------------------------
+@dataclass
+class Level:
+    """What :func:`amplitude_table` reads of a LevelComparison."""
+
+    level: float
+    peaks_measured: list
+    peaks_model: list
+    harmonics: list = field(default_factory=list)
+    thd_measured: float | None = None
+    thd_model: float | None = None
+    dc_measured: float = 0.0
+    dc_model: float = 0.0
+    dc_standard_error: float = 0.0
+    unit: str = "N"
+
+
+def peak(f, zeta=0.01, db=30.0, prominence=20.0):
+    """A resonance as compare_level gives it (half-power values biased as smoothing does,
+    the mode fit exact)."""
+    return {"frequency": round(f / 5.9) * 5.9, "damping_ratio": 1.4 * zeta, "peak_db": db,
+            "prominence_db": prominence, "fit_frequency": f, "fit_damping": zeta,
+            "fit_r2": 0.99}
+
+
+def harm(h2=(0.01, 0.01), h3=(0.01, 0.01), floor=1e-4):
+    """Harmonic rows: (measured, model) ratios P_k/P_1 and the measured noise floor."""
+    return [{"order": k, "measured_ratio": m, "model_ratio": s, "measured_floor_ratio": floor}
+            for k, (m, s) in ((2, h2), (3, h3))]
+
+
+LEVELS = (0.03, 0.1, 0.3)
+
+
+def levels_of(measured, model, **kw):
+    """One Level per entry of LEVELS; ``measured``/``model`` give (f, zeta) per level."""
+    return [Level(lv, [peak(*m)], [peak(*s)], harm(), **kw)
+            for lv, m, s in zip(LEVELS, measured, model, strict=True)]
+
+
+def test_track_follows_drifting_peaks_and_starts_new_ones():
+    lists = [[{"frequency": 600.0}, {"frequency": 1500.0}],
+             [{"frequency": 605.0}, {"frequency": 1490.0}, {"frequency": 2100.0}],
+             [{"frequency": 1480.0}, {"frequency": 2110.0}]]
+    assert track(lists) == [[0, 0, None], [1, 1, 0], [None, 2, 1]]
+    # a step beyond the tolerance is another resonance
+    assert track([[{"frequency": 1000.0}], [{"frequency": 1200.0}]]) == [[0, None], [None, 0]]
+
+
+def test_a_measured_track_pairs_with_the_model_track_over_the_same_levels():
+    """An added mass puts the measured resonance 6 % below the model's at every level; at
+    the top level the model shows a second peak nearer to it (1320 Hz, 5.9 % away): the
+    measured track must still pair with the model resonance it follows over all levels."""
+    meas = [[peak(1410.0)], [peak(1405.0)], [peak(1400.0)]]
+    model = [[peak(1500.0)], [peak(1495.0)], [peak(1320.0, db=10), peak(1494.0)]]
+    tm, tx = track(meas), track(model)
+    pairs = dict(pair_tracks(tm, tx, meas, model))
+    paired = tx[pairs[0]]
+    assert [model[lv][i]["frequency"] for lv, i in enumerate(paired)] == \
+        [peak(f)["frequency"] for f in (1500.0, 1495.0, 1494.0)]
+    table = amplitude_table([Level(lv, m, s) for lv, m, s in zip(LEVELS, meas, model,
+                                                                  strict=True)])
+    row = next(r for r in table["resonances"] if r["kind"] == "paired")
+    assert [x["shift_pct"] for x in row["levels"]] == pytest.approx(
+        [100 * math.log(a / b) for a, b in ((1410, 1500), (1405, 1495), (1400, 1494))])
+    assert [x["method"] for x in row["levels"]] == ["mode fit"] * 3
+    assert any(r["kind"] == "model only" for r in table["resonances"])
+
+
+def test_harmonic_images_of_a_strong_resonance_are_left_out():
+    peaks = [{"frequency": 1494.0, "peak_db": 38.0}, {"frequency": 3000.0, "peak_db": 45.0},
+             {"frequency": 4453.0, "peak_db": 18.0}]  # 3 x 1494 = 4482 Hz, 0.7 % away
+    assert harmonic_images(peaks) == [2]  # 3000 Hz is higher than 1494 Hz: a mode
+
+
+def test_the_model_s_own_amplitude_dependence_is_no_discrepancy():
+    both = [(1500.0, 0.005), (1485.0, 0.006), (1470.0, 0.008)]
+    assert classes(levels_of(both, both)) == {}
+
+
+def test_softening_with_growing_damping():
+    model = [(1500.0, 0.005)] * 3
+    meas = [(1530.0, 0.010), (1515.0, 0.012), (1500.0, 0.015)]
+    found = classes(levels_of(meas, model))
+    assert list(found) == ["softening"]
+    (ev,) = found["softening"]["resonances"]
+    assert ev["shift_pct"] == pytest.approx([100 * math.log(f / 1500) for f, _ in meas])
+    assert ev["damping_ratio"] == pytest.approx([2.0, 2.4, 3.0])
+    text = amplitude_dependence(levels_of(meas, model))["sentences"]
+    assert text == ["The 1.53 kHz resonance moves from 2.0 % above to 0.0 % above the model's "
+                    "while its damping goes from 2.0x to 3.0x the model's as the force rises "
+                    "from 0.03 N to 0.3 N: softening with growing damping, the signature of "
+                    "micro-slip friction or of a contact that opens (Kerschen et al. 2006)."]
+
+
+def test_hardening_relative_to_a_softening_model():
+    model = [(1500.0, 0.005), (1490.0, 0.005), (1480.0, 0.005)]
+    meas = [(1500.0, 0.005), (1500.0, 0.005), (1500.0, 0.005)]  # +1.3 % relative
+    assert list(classes(levels_of(meas, model))) == ["hardening"]
+
+
+def test_amplitude_independent_frequency_and_damping():
+    model = [(1500.0, 0.005)] * 3
+    assert list(classes(levels_of([(1410.0, 0.005)] * 3, model))) == ["amplitude_independent"]
+    found = classes(levels_of([(1500.0, 0.008)] * 3, model))  # damping only, 1.6x
+    assert found["amplitude_independent"]["resonances"][0]["damping_differs"]
+    assert not found["amplitude_independent"]["resonances"][0]["frequency_differs"]
+    # below the thresholds: nothing
+    assert classes(levels_of([(1503.0, 0.0053)] * 3, model)) == {}
+
+
+def test_new_peak_needs_a_prominent_measured_resonance():
+    def with_extra(prominence):
+        out = levels_of([(1500.0, 0.005)] * 3, [(1500.0, 0.005)] * 3)
+        for lv in out:
+            lv.peaks_measured.append(peak(2100.0, prominence=prominence))
+        return out
+
+    found = classes(with_extra(15.0))
+    assert list(found) == ["new_peak"]
+    assert found["new_peak"]["resonances"][0]["levels"] == list(LEVELS)
+    assert classes(with_extra(8.0)) == {}
+
+
+def test_even_harmonics_and_dc():
+    same = [(1500.0, 0.005)] * 3
+
+    def with_harmonics(**kw):
+        out = levels_of(same, same)
+        out[1].harmonics = harm(**kw)
+        return out
+
+    # H2 6 dB above the model's, H3 unchanged: asymmetric
+    found = classes(with_harmonics(h2=(0.02, 0.01)))
+    assert list(found) == ["even_harmonics"]
+    assert found["even_harmonics"]["harmonics"][0]["difference_db"] == pytest.approx(6.02, 1e-3)
+    # H3 14 dB up as well: more nonlinear overall, symmetric part dominating (6 < 14/2)
+    assert classes(with_harmonics(h2=(0.02, 0.01), h3=(0.05, 0.01))) == {}
+    # the measured H2 only 6 dB above its noise floor: not usable
+    assert classes(with_harmonics(h2=(0.02, 0.01), floor=0.01)) == {}
+    # a DC difference of 10 standard errors
+    dc = levels_of(same, same)
+    dc[2].dc_measured, dc[2].dc_standard_error = 1e-3, 1e-4
+    found = classes(dc)
+    assert found["even_harmonics"]["dc"][0]["sigma"] == pytest.approx(10.0)
+
+
+def test_one_level_gives_a_table_and_no_class():
+    one = levels_of([(1410.0, 0.005)] * 3, [(1500.0, 0.005)] * 3)[:1]
+    assert classes(one) == {}
+    amp = amplitude_dependence(one)
+    assert amp["classes"] == {}
+    assert amp["table"]["resonances"][0]["levels"][0]["shift_pct"] == \
+        pytest.approx(100 * math.log(1410 / 1500))
+    assert amp["sentences"] == ["One excitation level: the amplitude dependence needs two or "
+                                "more."]
+
+
+def test_allows_prunes_by_declared_classes_and_never_without_evidence():
+    class Unknown(Effect):
+        name = "unknown"
+
+        def apply(self, place, hooks, p):
+            pass
+
+    assert all(allows(e, {}) for e in ("friction", "added_mass", "clearance", Unknown))
+    soft = {"softening": {}}
+    assert allows("friction", soft) and allows("clearance", soft)
+    assert not allows("added_mass", soft) and not allows("preload", soft)
+    assert allows(Unknown, soft) and allows(Unknown(), soft)
+    assert allows("flexible_mode", {"new_peak": {}}) and not allows("damping", {"new_peak": {}})
+
+
+def test_noise_estimates_of_a_linear_record():
+    """The per-level noise numbers the table uses, on the linear 2-DOF oscillator (no
+    harmonics at all) with white output noise of known standard deviation: the noise
+    estimate within 15 % (the 5 % quantile of ~1700 exponential line powers scatters by
+    ~6 % in sigma; 5 seeds gave -11 % to +9 %), the DC standard error sigma/sqrt(n), and the
+    measured H2/H1 and H3/H1 (pure noise here) within 4.5 dB of their noise floors (one
+    noise realisation against another; 5 seeds gave -3.5 to +1.2 dB), so a harmonic 10 dB
+    above its floor is no noise."""
+    from dataclasses import replace
+
+    from sensfw.excitation import Chirp
+    from sensfw.measure.compare import dc_standard_error, harmonic_floor, harmonics, noise_sigma
+    from sensfw.models.analytic import TwoDOF
+
+    model = TwoDOF()
+    sig = model.simulate(model.parameters().nominal(),
+                         Chirp(50, 2000, 0.15, 20000.0, 1.0, tail=0.02))
+    y = sig.channels["a1"]
+    assert noise_sigma(sig, "a1") < 1e-3 * np.std(y)
+    sigma = 0.03 * np.std(y)
+    noisy = replace(sig, channels={"a1": y + sigma * np.random.default_rng(7).standard_normal(
+        len(y))})
+    assert noise_sigma(noisy, "a1") == pytest.approx(sigma, rel=0.15)
+    n = len(noisy.sweep().force)
+    assert dc_standard_error(noisy, "a1") == pytest.approx(noise_sigma(noisy, "a1") / n**0.5)
+    h, floor = harmonics(noisy, "a1"), harmonic_floor(noisy, "a1")
+    for k in (2, 3):
+        assert 20 * np.log10(h[k] / h[1] / floor[k]) == pytest.approx(0.0, abs=4.5)
+
+
+# ---- the shaft model with hidden effects -----------------------------------------------------
+def short_quick() -> dict:
+    """The quick study with a 0.15 s chirp and a 2e-5 s step (CI time)."""
+    data = tomllib.loads((ROOT / "studies" / "quick.toml").read_text())
+    data["excitation"]["duration"] = "0.15 s"
+    data["solver"]["step"] = "2e-5 s"
+    return data
+
+
+@pytest.fixture(scope="module")
+def study():
+    return Study.from_dict(short_quick(), "quick-short")
+
+
+@pytest.fixture(scope="module")
+def runner(tmp_path_factory):
+    with Runner(RunStore(tmp_path_factory.mktemp("runs")), backend="processes",
+                workers=2) as r:
+        yield r
+
+
+def compare(study, runner, effect, levels, noise=0.02, seed=1):
+    """The model against a synthetic measurement with ``effect`` hidden, at ``levels``
+    (independent noise per level)."""
+    meas = []
+    for i, lv in enumerate(levels):
+        sig, info = synthesize(study, effects=[effect] if effect else [], amplitude=lv,
+                               rig=Rig(noise=noise, seed=seed + 100 * i))
+        meas.append(prepare(Measurement(f"{effect}@{lv:g}", sig, level=info["amplitude"]),
+                            study))
+    return compare_measurements(study, meas, runner)
+
+
+def main_resonance(found, cls):
+    """The evidence of ``cls`` at the crankshaft rocking mode (1.5 kHz in the model)."""
+    rows = [r for r in found[cls]["resonances"] if 1300 < r["frequency_hz"] < 1650]
+    assert len(rows) == 1, found[cls]
+    return rows[0]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("noise", "seed"), [(0.02, 1), (0.05, 2)])
+def test_noise_only_gives_no_class_and_stays_well_inside_the_thresholds(study, runner, noise,
+                                                                        seed):
+    """The model against itself plus 2 % and 5 % noise at 0.03, 0.1 and 0.3 N. The
+    thresholds were set on 8 seeds at each noise level (the largest values noise gave:
+    shift 0.04 %, shift trend 0.07 %, |ln damping ratio| 0.04, damping trend 0.04, usable
+    harmonic difference 0.3 dB, DC 2.6 standard errors, no measured-only resonance); each
+    threshold is at least 3 times what these seeds give."""
+    cmp = compare(study, runner, None, [0.03, 0.1, 0.3], noise, seed)
+    amp = cmp.amplitude
+    assert amp["classes"] == {}
+    table = amp["table"]
+    rows = [x for r in table["resonances"] if r["kind"] == "paired" for x in r["levels"]
+            if x["method"] == "mode fit" and x["shift_pct"] is not None
+            and min(x["measured_prominence_db"], x["model_prominence_db"]) >= 10]
+    assert rows  # the main resonance is compared at every level
+    assert max(abs(x["shift_pct"]) for x in rows) < THRESHOLDS["shift_pct"] / 3
+    assert max(abs(math.log(x["damping_ratio"])) for x in rows) < THRESHOLDS["damping"] / 3
+    for h in table["harmonics"]:
+        assert abs(h["dc_measured"] - h["dc_model"]) < THRESHOLDS["dc_sigma"] / 2 * \
+            h["dc_standard_error"]
+    assert not [r for r in table["resonances"] if r["kind"] == "measured only"]
+    json.dumps(cmp.to_dict())  # compare.json is plain JSON
+
+
+@pytest.mark.slow
+def test_added_mass_is_amplitude_independent(study, runner, tmp_path):
+    """20 g at the crankshaft's end: the 1.5 kHz rocking mode sits 6.4 % below the model's
+    with the same damping at 0.03 and 0.1 N, where the model is weakly nonlinear (THD
+    0.8 % and 6.8 %). At 0.3 N the model's own contacts start to lift off (slide bearing 2
+    opens 1 % of the time, THD 20 %) and the shifted mode changes that nonlinear response:
+    H2/H1 is then 7 dB above the model's, so an added mass in a nonlinear structure is
+    amplitude independent only where the structure is nearly linear."""
+    cmp = compare(study, runner, "added_mass@crankshaft:added_mass=0.02", [0.03, 0.1])
+    found = cmp.amplitude["classes"]
+    assert list(found) == ["amplitude_independent"]
+    ev = main_resonance(found, "amplitude_independent")
+    assert ev["shift_pct"] == pytest.approx([-6.4, -6.4], abs=0.2)
+    assert ev["frequency_differs"] and not ev["damping_differs"]
+    assert "6.4 % below the model's" in cmp.amplitude["sentences"][0]
+    # the report shows the table, the plot and the sentence
+    from sensfw.report.measure import write_compare_report
+
+    html = write_compare_report(study, cmp.levels, cmp.pairs, cmp.amplitude, cmp.notes,
+                                tmp_path / "report.html").read_text()
+    assert "Amplitude dependence" in html and "6.4 % below the model" in html
+    assert html.count("<img") >= 4
+    # one level: the table, no class, every candidate allowed
+    one = amplitude_dependence(cmp.levels[1:])
+    assert one["classes"] == {} and one["table"]["resonances"]
+    assert allows("friction", one["classes"])
+
+
+@pytest.mark.slow
+def test_friction_softens_with_added_damping(study, runner):
+    """Stick-slip friction (mu 0.15, friction velocity 0.5 mm/s) along the clutch's
+    guidance in the driveshaft, driven by the clutch's weight on it. At 0.01 and 0.03 N the
+    slip velocity stays in the regularised law's viscous range: the friction locks the
+    clutch to the driveshaft, the 1.5 kHz mode sits 2.0 % above the model's with 4.6x its
+    damping; at 0.1 N it slips and the mode falls back to +0.8 %: softening with added
+    damping, the micro-slip signature. (The added damping stays 4.2-4.6x the model's rather
+    than growing: past the transition the regularised law is Coulomb friction, whose
+    equivalent damping falls with amplitude.) The friction also makes the 625 Hz axial mode
+    visible at the crankshaft (a new peak) and shifts the 4.1 kHz driveshaft mode by a
+    constant -1.5 % (amplitude independent)."""
+    cmp = compare(study, runner, "friction@clutch_drive", [0.01, 0.03, 0.1])
+    found = cmp.amplitude["classes"]
+    assert "softening" in found and "hardening" not in found
+    ev = main_resonance(found, "softening")
+    assert ev["shift_pct"] == pytest.approx([2.0, 2.0, 0.8], abs=0.3)
+    assert ev["shift_trend_pct"] < -2 * THRESHOLDS["shift_trend_pct"]
+    assert min(ev["damping_ratio"]) > 3.0
+    assert allows("friction", found)
+    sentence = cmp.amplitude["sentences"][0]
+    assert sentence.startswith("The 1.54 kHz resonance moves from 2.0 % above to 0.8 % above")
+    assert "softening with added damping" in sentence
+
+
+@pytest.mark.slow
+def test_preload_gives_even_harmonics_and_a_constant_shift(study, runner):
+    """20 N axial preload at the crankshaft's end. It acts 10 mm above the flange that
+    takes it, and the moment unloads slide bearing 1 (static penetration 0.10 -> 0.03 um)
+    while loading slide bearing 2 (0.07 -> 0.14 um). The rocking mode softens by a constant
+    9.8 % (linearised 1508 -> 1380 Hz; so lightly damped, 0.16 %, that the 0.15 s record
+    does not resolve it as a clean mode: half-power values, trusted to one FRF line), and
+    slide bearing 1 now opens for 4 % of each cycle at 0.1 N, a one-sided contact loss that
+    makes the restoring force asymmetric: H2/H1 8.5 dB above the model's (H3/H1 +12.8 dB,
+    less than twice that). The preload also makes two modes the model has visible at the
+    crankshaft's axial sensor (642 Hz axial, 1.69 kHz: new peaks). A 5 N preload changes
+    too little to show: +0.25 % and H2/H1 4 dB *below* the model's (it pushes contacts
+    further closed)."""
+    cmp = compare(study, runner, "preload@crankshaft:preload_force=20", [0.03, 0.1])
+    found = cmp.amplitude["classes"]
+    assert set(found) == {"even_harmonics", "amplitude_independent", "new_peak"}
+    ev = main_resonance(found, "amplitude_independent")
+    assert ev["shift_pct"] == pytest.approx([-9.7, -9.7], abs=0.5)
+    (h2,) = found["even_harmonics"]["harmonics"]
+    assert h2["level"] == pytest.approx(0.1) and h2["difference_db"] > 6.0
+    assert 2 * h2["difference_db"] > h2["odd_difference_db"]
+    assert sorted(round(r["frequency_hz"], -1) for r in found["new_peak"]["resonances"]) \
+        == [640, 1690]
+    assert allows("preload", found)
+
+
+@pytest.mark.slow
+def test_contact_hardening_at_a_loaded_bearing_shifts_and_distorts_but_does_not_harden(
+        study, runner):
+    """A Hertz point-contact exponent (2.0 instead of the line contact's 10/9) at roller
+    bearing L1. The literature's class for contact hardening is hardening; on the shipped
+    model it cannot be: L1 rests on the driveshaft's weight (static penetration 0.075 um,
+    motion 0.02-0.06 um peak to peak at 0.03-0.1 N), and a preloaded power law with b > 1 is
+    softening about its operating point (second-order frequency correction
+    -(b-1)(2b+1)/48 (a/delta0)^2 of the backbone), asymmetric (even harmonics) and, with the
+    law rescaled to the same force at 0.1 um, stiffer at that point. No place of the model
+    gives hardening between 0.03 and 0.3 N (all eight contacts tried with exponents 1.12 and
+    2.0: the largest upward trend of the discrepancy was +0.11 %, the threshold 0.5 %);
+    above 0.3 N the model's own contacts lift off and its resonances are no longer clean
+    modes. What shows: the 1.5 kHz mode 1.4 % above
+    the model's at both levels and H2/H1 13 dB above the model's: amplitude independent and
+    even harmonics, which is what ContactHardening.signature_classes now declares besides
+    hardening."""
+    cmp = compare(study, runner, "contact_hardening@bearing_l1:hardening_increase=0.889",
+                  [0.03, 0.1])
+    found = cmp.amplitude["classes"]
+    assert set(found) == {"amplitude_independent", "even_harmonics"}
+    ev = main_resonance(found, "amplitude_independent")
+    assert ev["shift_pct"] == pytest.approx([1.4, 1.4], abs=0.2)
+    assert max(h["difference_db"] for h in found["even_harmonics"]["harmonics"]) > 10
+    assert allows("contact_hardening", found)
+
+
+@pytest.mark.slow
+def test_clearance_below_its_gap_leaves_no_signature(study, runner):
+    """0.5 um of play at the clutch's guidance in the driveshaft's bore (the model has none
+    there). The clutch rests on it under its weight with 0.014 um penetration; at 0.03 and
+    0.3 N its motion there is 0.001 and 0.026 um peak to peak and it at most touches zero
+    load (penetration down to -0.001 um at 0.3 N), so the play is never crossed and the
+    measurement is the model's: no class. (Every other contact
+    of the model is held closed by a static load far larger than the motion below 0.3 N, so
+    a clearance anywhere is as invisible.)"""
+    cmp = compare(study, runner, "clearance@clutch_drive:clearance_gap=0.0005", [0.03, 0.3])
+    assert cmp.amplitude["classes"] == {}
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="no level of the shipped model shows a clearance's textbook "
+                   "hardening: see the docstring")
+def test_clearance_across_its_gap_hardens(study, runner):
+    """The literature's class of a clearance once the motion crosses it is hardening. At the
+    clutch's guidance the clutch lifts off its seat from about 0.5 N (at 1.0 N its
+    penetration swings from +0.05 to -0.07 um), but it would have to travel 1 um to meet the
+    far side of the 0.5 um play, which it does only from about 2 N, where every contact of
+    the model rattles. Between 0.3 and 1.0 N the model's own slide bearings and L3 lift off
+    too, its 1.5 kHz resonance falls to 12 dB prominence and is no clean mode in either FRF
+    (the single-mode fit fails), and the half-power values move irregularly (1.0 N: 1.6 %
+    below the model's, 1.5 N: 4.0 % above): no consistent class. Strict xfail: if the
+    classifier ever finds hardening here, this test fails and the docstrings above need
+    revisiting."""
+    cmp = compare(study, runner, "clearance@clutch_drive:clearance_gap=0.0005", [0.3, 1.0])
+    assert "hardening" in cmp.amplitude["classes"]
