@@ -61,11 +61,18 @@ class Effect(ABC):
         ``p`` (the model's and the effect's, paper units)."""
 
     def probes(self, comparisons) -> list[dict[str, float]]:
-        """Points at which diagnosis first tries the effect (from the neutral model): by
-        default every parameter at its nominal value; effects whose response is multimodal
-        in a parameter (a mode's frequency) give several, guided by the evidence of the
-        model/measurement ``comparisons``."""
-        return [{p.name: p.nominal for p in self.parameters()}]
+        """Points at which diagnosis first tries the effect. By default its first parameter
+        (the strength: a mass, a force, a coefficient) at a quarter, half and all of the way
+        from its neutral value to its maximum, the others at their nominal values: an effect
+        explains a discrepancy only at about the right strength, and a weak probe can look
+        worse than no effect at all. Effects whose response is multimodal in a parameter (a
+        mode's frequency) override this, guided by the evidence of the model/measurement
+        ``comparisons``."""
+        params = self.parameters()
+        nominal = {p.name: p.nominal for p in params}
+        lead = params[0]
+        start = self.neutral.get(lead.name, lead.min)
+        return [{**nominal, lead.name: start + f * (lead.max - start)} for f in (0.25, 0.5, 1.0)]
 
     def spec(self) -> dict:
         out = {"name": self.name}

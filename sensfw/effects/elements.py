@@ -142,5 +142,5 @@ class FlexibleMode(Effect):
                              "flex_damping": zeta, "flex_mass": 0.03} for s in (0.85, 1.0)]
         if not out:
             out = [{"flex_frequency": f, "flex_damping": 0.02, "flex_mass": 0.03}
-                   for f in (900.0, 1700.0, 3200.0)]
+                   for f in (800.0, 1300.0, 2100.0, 3400.0)]
         return out[:4]

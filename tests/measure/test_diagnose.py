@@ -1,6 +1,12 @@
-"""Model against measurement with a hidden physical effect (issue 6): diagnose names it,
-augment calibrates it down to the noise floor; noise alone gives no verdict; two excitation
-levels reveal and use the amplitude dependence."""
+"""Diagnosis when the model's own parameters are also off (issue 16): synthetic measurements
+of the quick study with base parameters off their nominal values, with or without a hidden
+effect at a chosen place, and rig noise. The base parameters are recalibrated with every
+hypothesis; the verdict is "parameters", an effect at a place, or "none".
+
+Every diagnosis here names a few candidates (the truth, the same effect at another place,
+and other effects) to keep the suite's time in bounds; ``bench/diagnose.py`` runs the full
+candidate set (every effect at every place) within the issue's budget.
+"""
 
 import json
 import tomllib
@@ -9,25 +15,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sensfw.measure.diagnose import Evaluator, augment, diagnose, rms
+from sensfw.measure.diagnose import diagnose
 from sensfw.measure.io import write_csv
-from sensfw.measure.session import Variant, load_measurements
-from sensfw.measure.synthetic import synthesize
-from sensfw.plugins import effects
+from sensfw.measure.session import load_measurements
+from sensfw.measure.synthetic import Rig, synthesize
 from sensfw.runs import Runner, RunStore
 from sensfw.study import Study
 
-pytestmark = pytest.mark.slow  # calibrations with many shaft simulations
-
+pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
-NOISE = 0.02  # noise std as a fraction of each channel's RMS
-EFFECTS = ["friction", "contact_hardening", "preload", "added_mass", "flexible_mode",
-           "damping"]
+#: two sensitive base parameters (the screen ranks both above 10 %) off by 1.5 and 1/1.54:
+#: the friction transition velocities move together (the study's group), 1.0 -> 0.65 mm/s
+OFFSETS = {"slide_stiffness": 7.05e5 * 1.5, "slide_v_friction": 0.65, "slide_v_stiction": 0.065}
+CALIBRATED = {"slide_stiffness": 7.05e5 * 1.5, "slide_friction_velocity": 0.65}
 
 
 def short_quick() -> dict:
-    """The quick study with a 0.15 s chirp and a 2e-5 s step (CI time; the synthetic
-    measurements use the same settings, so the comparison is consistent)."""
+    """The quick study (with its [calibration]) on a 0.15 s chirp and a 2e-5 s step, for CI
+    time; the synthetic measurements use the same settings."""
     data = tomllib.loads((ROOT / "studies" / "quick.toml").read_text())
     data["excitation"]["duration"] = "0.15 s"
     data["solver"]["step"] = "2e-5 s"
@@ -46,88 +51,122 @@ def runner(tmp_path_factory):
         yield r
 
 
-def hidden_values(name: str, rng) -> dict[str, float]:
-    """A random value inside each parameter's bounds (log-uniform over factor-10 ranges)."""
-    out = {}
-    for p in effects.get(name)().parameters():
-        if p.min > 0 and p.max >= 10 * p.min:
-            out[p.name] = float(np.exp(rng.uniform(np.log(p.min), np.log(p.max))))
-        else:
-            out[p.name] = float(rng.uniform(p.min, p.max))
-    return out
+def measure(study, tmp_path, effect=None, noise=0.02, seed=5, levels=(0.1,)):
+    files = []
+    for i, level in enumerate(levels):
+        sig, _ = synthesize(study, sets=OFFSETS, effects=[effect] if effect else [],
+                            amplitude=level, rig=Rig(noise=noise, seed=seed + i))
+        files.append(write_csv(tmp_path / f"m{i}.csv", sig, level=level))
+    return load_measurements(study, [str(f) for f in files])
 
 
-def measurement(study, tmp_path, effect_text, seed, amplitude=None, name="m.csv"):
-    sig, info = synthesize(study, effects=[effect_text] if effect_text else [],
-                           noise=NOISE, seed=seed, amplitude=amplitude)
-    return write_csv(tmp_path / name, sig, level=info["amplitude"])
+def check_nested(result):
+    """No calibrated candidate ends worse than the hypothesis it extends (each starts where
+    it vanishes exactly, and only improving steps are taken)."""
+    h0 = result.rows[0]["chi2"]
+    for row in result.ranking:
+        assert row["chi2"] <= h0 + 1e-9, (row["hypothesis"], row["chi2"], h0)
 
 
-@pytest.mark.parametrize("name", EFFECTS)
-def test_hidden_effect_is_found_and_calibrated_to_the_noise_floor(name, study, runner,
-                                                                   tmp_path):
-    rng = np.random.default_rng(EFFECTS.index(name) + 11)
-    truth = hidden_values(name, rng)
-    text = name + ":" + ",".join(f"{k}={v!r}" for k, v in truth.items())
-    meas = load_measurements(study, [str(measurement(study, tmp_path, text, seed=5))])
-    result = diagnose(study, meas, runner)
-    assert result["ranking"][0]["effect"] == name, [
-        (r["effect"], round(r["error_after"], 3)) for r in result["ranking"][:3]]
-    aug = augment(study, meas, runner, name, start=result["ranking"][0]["params"])
-    # noise floor: the true model against the same noisy data
-    spec = effects.get(name)().spec()
-    floor = rms(Evaluator(study, meas, runner).evaluate([Variant.of([spec], truth)],
-                                                        "truth")[0])
-    errors = [t["error"] for t in aug["trajectory"]]
-    assert errors[-1] <= 1.5 * floor, (errors, floor, aug["params"], truth)
-    assert errors[-1] < errors[0]
-    # the verdict names it unless the hidden value is too weak to stand out of the noise
-    assert result["verdict"] == name or errors[0] < 3 * floor, (result["verdict"], errors,
-                                                                floor)
+def test_offsets_without_an_effect_give_parameters_and_recover_them(study, runner, tmp_path):
+    meas = measure(study, tmp_path)
+    res = diagnose(study, meas, runner, candidates=["added_mass@crankshaft",
+                                                    "damping@bearing_l3",
+                                                    "preload@crankshaft"])
+    assert res.verdict == "parameters", (res.reason, [(r["hypothesis"], r["chi2"])
+                                                      for r in res.rows])
+    values = {c["name"]: c for c in res.rows[0]["calibration"]}
+    for name, truth in CALIBRATED.items():
+        assert values[name]["value"] == pytest.approx(truth, rel=0.15), values[name]
+    assert res.errors["parameters"] < 0.5 * res.errors["nominal"]
+    check_nested(res)
 
 
-def test_noise_only_gives_no_verdict(study, runner, tmp_path):
-    meas = load_measurements(study, [str(measurement(study, tmp_path, None, seed=9))])
-    result = diagnose(study, meas, runner)
-    assert result["verdict"] == "none", [(r["effect"], r["delta_bic"], r["reduction"])
-                                         for r in result["ranking"][:3]]
-    assert result["n_simulations"] > 0
+CASES = [
+    # (hidden effect, candidates): two at a non-default place (driveshaft), each against
+    # the same effect elsewhere and other effects
+    ("added_mass@driveshaft:added_mass=0.04",
+     ["added_mass@driveshaft", "added_mass@crankshaft", "damping@bearing_l3"]),
+    ("flexible_mode@driveshaft:flex_frequency=1800,flex_damping=0.02,flex_mass=0.03",
+     ["flexible_mode@driveshaft", "flexible_mode@crankshaft", "added_mass@driveshaft"]),
+    ("friction@clutch_drive:friction_mu=0.15,friction_velocity=0.5",
+     ["friction@clutch_drive", "friction@clutch_crank", "damping@clutch_drive"]),
+    ("preload@crankshaft:preload_force=15",
+     ["preload@crankshaft", "preload@driveshaft", "added_mass@crankshaft"]),
+    ("contact_hardening@clutch_crank:hardening_increase=0.5",
+     ["contact_hardening@clutch_crank", "contact_hardening@bearing_l1",
+      "damping@clutch_crank"]),
+]
 
 
-def test_two_levels_amplitude_dependence_reported_and_used(study, runner, cli, tmp_path):
-    text = "contact_hardening:hardening_exponent=1.7"
-    files = [measurement(study, tmp_path, text, seed=1, amplitude=0.05, name="lo.csv"),
-             measurement(study, tmp_path, text, seed=2, amplitude=0.2, name="hi.csv")]
+@pytest.mark.parametrize("hidden,candidates", CASES, ids=[c[0].split(":")[0] for c in CASES])
+def test_offsets_and_an_effect_name_the_effect_and_its_place(hidden, candidates, study,
+                                                             runner, tmp_path):
+    meas = measure(study, tmp_path, hidden)
+    res = diagnose(study, meas, runner, candidates=candidates, refine=2)
+    truth = hidden.split(":")[0]
+    assert res.verdict == truth, (res.reason, [(r["hypothesis"], round(r["chi2"], 1))
+                                               for r in res.rows])
+    check_nested(res)
+    assert res.errors["best"] < res.errors["parameters"]
+
+
+@pytest.mark.parametrize("noise,seed", [(0.05, 1), (0.05, 2), (0.05, 3),
+                                        (0.10, 1), (0.10, 2), (0.10, 3)])
+def test_noise_and_offsets_never_give_an_effect(noise, seed, study, runner, tmp_path):
+    meas = measure(study, tmp_path, noise=noise, seed=seed)
+    res = diagnose(study, meas, runner, candidates=["added_mass@crankshaft",
+                                                    "damping@bearing_l3"], refine=1)
+    assert res.verdict in ("parameters", "none"), (res.reason, res.rows[1:])
+    check_nested(res)
+
+
+def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_path):
+    """The commands end to end on a flexible mode: diagnose.json names it; augment starts
+    from it, writes a study with the effect, its values and [calibration], and the error
+    falls along nominal -> base recalibrated -> jointly calibrated."""
+    import tomlkit
+
+    hidden = "flexible_mode@driveshaft:flex_frequency=1800,flex_damping=0.02,flex_mass=0.03"
+    sig, _ = synthesize(study, sets=OFFSETS, effects=[hidden], amplitude=0.1,
+                        rig=Rig(noise=0.02, seed=5))
+    m = write_csv(tmp_path / "m.csv", sig, level=0.1)
     study_file = tmp_path / "s.toml"
-    from tomlkit import dumps
-
-    study_file.write_text(dumps(short_quick()))
-    args = [a for f in files for a in ("-m", f)]
-    proc = cli("compare", study_file, *args, "--out", tmp_path / "cmp", "--no-progress")
+    study_file.write_text(tomlkit.dumps(short_quick()))
+    proc = cli("diagnose", study_file, "-m", m, "--out", tmp_path / "d", "--no-progress",
+               "--candidates", "flexible_mode@driveshaft,added_mass@driveshaft",
+               timeout=1200)
     assert proc.returncode == 0, proc.stderr
-    cmp = json.loads((tmp_path / "cmp" / "compare.json").read_text())
-    assert [lv["level"] for lv in cmp["levels"]] == pytest.approx([0.05, 0.2], rel=1e-6)
-    amp = cmp["amplitude_dependence"]
-    assert amp["thd_ratio"]["measured"] > 2.0  # harmonics grow faster than the level
-    assert any("nonlinear" in line for line in amp["summary"])
-    meas = load_measurements(study, [str(f) for f in files])
-    result = diagnose(study, meas, runner,
-                      candidates=["contact_hardening", "added_mass", "preload", "damping"])
-    assert result["verdict"] == "contact_hardening"
-    # both levels enter the discrepancy: the baseline comparison has one entry per level
-    assert len(result["baseline"]["comparison"]) == 2
+    diag = json.loads((tmp_path / "d" / "diagnose.json").read_text())
+    assert diag["verdict"] == "flexible_mode@driveshaft"
+    assert "data:image/png;base64" in (tmp_path / "d" / "report.html").read_text()
+    proc = cli("augment", study_file, "-m", m, "--effect", "flexible_mode@driveshaft",
+               "--start-from", tmp_path / "d" / "diagnose.json", "--out", tmp_path / "a",
+               "--no-progress", timeout=1200)
+    assert proc.returncode == 0, proc.stderr
+    aug = json.loads((tmp_path / "a" / "augment.json").read_text())
+    errors = [t["error"] for t in aug["trajectory"]]
+    assert errors[0] > errors[1] > errors[3], errors  # nominal > base > jointly calibrated
+    written = tomllib.loads((tmp_path / "a" / "study.toml").read_text())
+    assert written["model"]["options"]["effects"] == [{"name": "flexible_mode",
+                                                       "attach": "driveshaft"}]
+    assert written["calibration"]["parameters"] == short_quick()["calibration"]["parameters"]
+    assert written["parameters"]["flex_frequency"]["nominal"] == pytest.approx(
+        aug["params"]["flex_frequency"])
+    Study.load(tmp_path / "a" / "study.toml")
 
 
 def test_augment_start_from_a_diagnose_file_without_the_effect_is_a_clear_error(
         study, cli, tmp_path):
-    meas = measurement(study, tmp_path, None, seed=3)
+    sig, _ = synthesize(study, amplitude=0.1)
+    meas = write_csv(tmp_path / "m.csv", sig, level=0.1)
     study_file = tmp_path / "s.toml"
-    from tomlkit import dumps
+    import tomlkit
 
-    study_file.write_text(dumps(short_quick()))
+    study_file.write_text(tomlkit.dumps(short_quick()))
     diag = tmp_path / "diagnose.json"
-    diag.write_text(json.dumps({"ranking": [{"effect": "damping", "attach": "slide",
-                                             "params": {"damping_factor": 2.0}}]}))
+    diag.write_text(json.dumps({"ranking": [{"effect": "damping", "place": "bearing_l3",
+                                             "params": {"extra_damping": 2.0}}]}))
     proc = cli("augment", study_file, "-m", meas, "--effect", "friction", "--start-from",
                diag, "--out", tmp_path / "aug", "--no-progress")
     assert proc.returncode == 2, proc.stderr
@@ -138,3 +177,41 @@ def test_augment_start_from_a_diagnose_file_without_the_effect_is_a_clear_error(
                diag, "--out", tmp_path / "aug", "--no-progress")
     assert proc.returncode == 2 and "diagnose.json" in proc.stderr, proc.stderr
     assert "not a readable diagnose.json" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_discrepancy_along_the_friction_velocity_at_a_stick_slip_setting(study, runner,
+                                                                         tmp_path):
+    """How smooth is the discrepancy in a stick-slip parameter? Scan the friction
+    transition velocity (the stick band's width, Eq. 3) finely around a low value, where the
+    crankshaft sticks and slips within each cycle, and compare the point-to-point scatter of
+    chi2 (second differences) with its trend. The calibration's difference step (5 % of the
+    coded range, :mod:`sensfw.measure.calibrate`) must be well above the scale where the
+    scatter dominates, and calibrating the velocity from a start off by a factor 2 must
+    come back to within 15 % of the truth."""
+    from sensfw.measure.calibrate import Coordinates, Evaluation, calibrate
+    from sensfw.measure.evaluate import Evaluator
+
+    truth = {"slide_stiffness": 7.05e5, "slide_damping": 234.0,
+             "slide_friction_velocity": 0.25}
+    sets = {"slide_v_friction": 0.25, "slide_v_stiction": 0.025}
+    sig, _ = synthesize(study, sets=sets, amplitude=0.1, rig=Rig(noise=0.02, seed=2))
+    meas = load_measurements(study, [str(write_csv(tmp_path / "m.csv", sig, level=0.1))])
+    space = study.calibration_space(["slide_friction_velocity"])
+    ev = Evaluator(study, meas, runner, space)
+    coords = Coordinates.of(space)
+    z0 = coords.code({"slide_friction_velocity": 0.25})[0]
+    grid = z0 + np.linspace(-0.1, 0.1, 11)  # 1 % steps of the coded range
+    ws = ev.evaluate(None, [coords.decode([z]) for z in grid], "scan")
+    chi2 = np.array([float(w @ w) for w in ws])
+    trend = np.polyval(np.polyfit(grid, chi2, 2), grid)
+    scatter = float(np.std(chi2 - trend))
+    # the scatter (the stick-slip roughness plus the noise's chi2 scatter) is small
+    # against the change of chi2 over the calibration's difference step
+    slope = float(np.max(np.abs(np.diff(trend)) / np.diff(grid)))
+    assert scatter < 0.25 * slope * 0.05, (scatter, slope, chi2)
+    start = {"slide_friction_velocity": 0.5}
+    (w,) = ev.evaluate(None, [start], "start")
+    fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibrate"), coords,
+                    Evaluation(start, w))
+    assert fit.values["slide_friction_velocity"] == pytest.approx(
+        truth["slide_friction_velocity"], rel=0.15)
