@@ -37,7 +37,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .errors import SensfwError, StudyError, UnknownPluginError
 from .excitation import Chirp
 from .models.base import Model, SolverSettings
-from .models.stepsize import CALIBRATED_METHODS
+from .models.stepsize import CALIBRATED_METHODS, DEFAULT_TOLERANCE
 from .params import DesignSpace, ParameterSet
 
 Quantity = str | float | int
@@ -101,8 +101,10 @@ class SolverSection(_Strict):
     step: Quantity = "1e-5 s"
     timeout: Quantity | None = None
     halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
-    # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py)
+    # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py),
+    # adaptive steps with this absolute error tolerance where they are over-damped and stiff
     auto_step: bool = True
+    tolerance: float = Field(default=DEFAULT_TOLERANCE, gt=0, lt=1e-3)
 
 
 class ExecutionSection(_Strict):
@@ -376,7 +378,8 @@ class Study:
                              "region is smaller): set auto_step = false and a step that "
                              f"suits {s.method}, or use RK44"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
-                              halvings=s.halvings, auto_step=s.auto_step)
+                              halvings=s.halvings, auto_step=s.auto_step,
+                              tolerance=s.tolerance)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

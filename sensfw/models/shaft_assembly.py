@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -44,6 +44,7 @@ from ..errors import DivergenceError, ParameterError, SimulationError
 from ..excitation import Chirp
 from ..params import Parameter, ParameterSet
 from ..plugins import models
+from . import integration
 from .base import Model, Signals, SolverSettings
 from .contact import (
     ContactLaw,
@@ -53,7 +54,7 @@ from .contact import (
     stiffness_si,
     symbolic_ops,
 )
-from .stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
+from .stepsize import StepChoice, choose_integration, first_order_eigenvalues, grid_step
 
 G = 9.81
 MM = 1e-3  # m per mm
@@ -584,24 +585,8 @@ class ShaftAssembly(Model):
         built = self.build(p, excitation, q0=q0, user_functions=user_functions)
         mbs, SC = built.mbs, built.SC
         n_out = excitation.n_samples
-        t_end = n_out / excitation.fs
-        ss = exu.SimulationSettings()
-        ss.timeIntegration.endTime = t_end
-        ss.timeIntegration.numberOfSteps = n_out * choice.substeps
-        ss.timeIntegration.automaticStepSize = False  # fixed steps on the output grid
-        ss.timeIntegration.verboseMode = 0
-        ss.timeIntegration.explicit.computeEndOfStepAccelerations = False
-        ss.timeIntegration.discontinuous.useRecommendedStepSize = False
-        ss.solution.file.write = False
-        ss.solution.sensors.writePeriod = 1.0 / excitation.fs
         try:
-            ok = mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, solver.method))
-            if ok is False:
-                raise SimulationError(self.name, "Exudyn solver did not finish", p)
-            channels = {}
-            for name, (s, comp) in built.sensors.items():
-                data = np.asarray(mbs.GetSensorStoredData(s))
-                channels[name] = np.ascontiguousarray(data[:n_out, 1 + comp])
+            channels, stats = integration.solve(mbs, built.sensors, choice, n_out, excitation.fs)
         except exu.SolverError as exc:
             raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
         finally:
@@ -619,7 +604,7 @@ class ShaftAssembly(Model):
                        f_inst=excitation.f_inst(t),
                        units={"force": "N", **{c: "m/s^2" for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
-                             **choice.to_meta()},
+                             **choice.to_meta(), **stats.to_meta()},
                        sweep_end=excitation.duration)
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings,
@@ -629,9 +614,10 @@ class ShaftAssembly(Model):
         the fastest eigenvalues of the model linearised at its static state ``q0`` (the
         stick band of the slide-bearing friction, over-damped and stiff contacts)."""
         if not solver.auto_step:
-            return grid_step(solver.step, fs)
+            return replace(grid_step(solver.step, fs), method=solver.method)
         M, K, D = self.linear_matrices(p, q0)
-        return explicit_step(first_order_eigenvalues(M, K, D), solver.step, fs)
+        return choose_integration(first_order_eigenvalues(M, K, D), solver.step, fs,
+                                  solver.method, solver.tolerance)
 
 
 class NonlinearContacts:
@@ -708,7 +694,9 @@ def _link_function(ln: Link, off: list[float], ops, contact, kind: str):
     """The CartesianSpringDamper user function of one link (reference offset removed)."""
 
     def force(mbs, t, itemNumber, u, v, k, d, offset):
-        fx, fy = ln.law(ops, (u[0] - off[0], u[1] - off[1]), (v[0], v[1]), contact)
+        # a zero offset is not subtracted: every node of a symbolic tree costs at every call
+        fx, fy = ln.law(ops, tuple(u[i] - off[i] if off[i] else u[i] for i in (0, 1)),
+                        (v[0], v[1]), contact)
         # Exudyn applies the returned force to marker 0 and its negative to marker 1
         return _vector([-fx, -fy, 0.0], kind)
 
