@@ -289,9 +289,11 @@ def plan(study: Study) -> list[dict]:
 
 
 def run_step(store: RunStore, key: str) -> dict:
-    """The time step a stored run used and what set it (``{}`` for models without one)."""
+    """The time step a stored run used, what set it, and the integrator (adaptive runs: at
+    most ``step``, with ``mean_step``); ``{}`` for models without one."""
     rec = store.record(key) or {}
-    return {k: rec[k] for k in ("step", "step_limited_by") if k in rec}
+    return {k: rec[k] for k in ("step", "step_limited_by", "integrator", "mean_step")
+            if k in rec}
 
 
 def results_json(res: StudyResult) -> dict:

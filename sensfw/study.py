@@ -311,7 +311,8 @@ class Study:
                              "region is smaller): set auto_step = false and a step that "
                              f"suits {s.method}, or use RK44"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
-                              halvings=s.halvings, auto_step=s.auto_step)
+                              halvings=s.halvings, auto_step=s.auto_step,
+                              tolerance=s.tolerance)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

@@ -8,6 +8,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from .models.stepsize import DEFAULT_TOLERANCE
+
 Quantity = str | float | int
 
 
@@ -58,8 +60,10 @@ class SolverSection(_Strict):
     step: Quantity = "1e-5 s"
     timeout: Quantity | None = None
     halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
-    # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py)
+    # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py),
+    # adaptive steps with this absolute error tolerance where they are over-damped and stiff
     auto_step: bool = True
+    tolerance: float = Field(default=DEFAULT_TOLERANCE, gt=0, lt=1e-3)
 
 
 class ExecutionSection(_Strict):

@@ -99,6 +99,19 @@ def test_automatic_step_only_with_the_integrators_it_is_calibrated_for():
     assert Study.from_dict(data, "x.toml").solver.auto_step
 
 
+def test_adaptive_tolerance_is_passed_on_and_checked():
+    """solver.tolerance (the absolute error tolerance of the runs the model integrates
+    adaptively, models/stepsize.py) reaches the solver settings and enters the run hash."""
+    data = copy.deepcopy(QUICK)
+    assert Study.from_dict(data, "x.toml").solver.tolerance == 1e-9
+    data["solver"] = {"tolerance": 5e-10}
+    solver = Study.from_dict(data, "x.toml").solver
+    assert solver.tolerance == 5e-10 and solver.to_dict()["tolerance"] == 5e-10
+    for bad in (0.0, -1e-9, 0.1):
+        data["solver"] = {"tolerance": bad}
+        assert "solver.tolerance" in problems(data)
+
+
 def test_missing_sections_and_bad_toml(tmp_path):
     got = problems({"stages": []})
     assert "study" in got and "stages" in got

@@ -12,6 +12,7 @@ from ..errors import SignalError
 from ..excitation import Chirp
 from ..params import ParameterSet
 from .places import Place
+from .stepsize import DEFAULT_TOLERANCE
 
 
 @dataclass
@@ -86,7 +87,11 @@ class SolverSettings:
     ``step`` is the largest step; a model may take a smaller one: always one that divides
     the output sample period, and with ``auto_step`` one that keeps the fastest eigenvalues
     of the run's own parameters within the integrator's accuracy limits
-    (:mod:`sensfw.models.stepsize`). The step a run used is in ``signals.meta["step"]``.
+    (:mod:`sensfw.models.stepsize`), or, where an over-damped eigenvalue would force a much
+    smaller fixed step, error-controlled adaptive steps of at most ``step`` with the
+    absolute ``tolerance`` (resampled onto the output grid, :mod:`sensfw.models.integration`).
+    The step a run used is in ``signals.meta["step"]``, the integrator in
+    ``signals.meta["integrator"]``.
     """
 
     method: str = "RK44"
@@ -94,10 +99,11 @@ class SolverSettings:
     timeout: float | None = None  # wall seconds per run; None = no limit
     halvings: int = 1  # retries with half the step after a divergence (explicit stability)
     auto_step: bool = True
+    tolerance: float = DEFAULT_TOLERANCE  # absolute error tolerance of adaptive runs
 
     def to_dict(self) -> dict:
         return {"method": self.method, "step": self.step, "halvings": self.halvings,
-                "auto_step": self.auto_step}
+                "auto_step": self.auto_step, "tolerance": self.tolerance}
 
 
 class Model(ABC):

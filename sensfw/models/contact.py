@@ -77,9 +77,21 @@ def impact_force(ops, delta: Expr, delta_dot: Expr, k: float, b: float, c: float
     k : stiffness in N/m^b.  b : force exponent.  c : maximum damping, N s/m.
     dmax : penetration (m) at which the full damping ``c`` is reached.
     """
-    s = ops.min(delta * (1.0 / dmax), 1.0)
-    closed = k * ops.pow(delta, b) + c * (s * s * (3.0 - 2.0 * s)) * delta_dot
-    return ops.where(delta > 0.0, ops.max(closed, 0.0), 0.0)
+    return ops.where(delta > 0.0, _closed_force(ops, delta, delta_dot, k, b, c, dmax), 0.0)
+
+
+def _closed_force(ops, delta: Expr, delta_dot: Expr, k: float, b: float, c: float,
+                  dmax: float) -> Expr:
+    """Eq. 2 for a closed contact (``delta > 0``), clipped at zero.
+
+    Written for the cost of Exudyn's symbolic expression trees, which are evaluated node by
+    node with no common subexpressions: ``STEP(delta, 0, 0, dmax, c)`` inside the ramp is the
+    cubic ``c s^2 (3 - 2 s)`` with ``s = delta / dmax``, expanded in ``delta`` so that no
+    clamping ``min``/``max`` is needed (the ramp branch is only taken for ``delta < dmax``).
+    """
+    a2, a3 = 3.0 * c / dmax**2, 2.0 * c / dmax**3
+    damping = ops.where(delta < dmax, delta * delta * (a2 - a3 * delta), c)
+    return ops.max(k * ops.pow(delta, b) + damping * delta_dot, 0.0)
 
 
 def clearance_force(ops, e: Expr, e_dot: Expr, gap: float, k: float, b: float, c: float,
@@ -88,9 +100,11 @@ def clearance_force(ops, e: Expr, e_dot: Expr, gap: float, k: float, b: float, c
 
     ``e`` is the relative displacement along the contact normal; the contact closes when
     ``|e| > gap`` with penetration ``|e| - gap`` and pushes back: the result is the force on
-    the moving part, ``-sign(e) F(|e| - gap)`` (Eq. 2 on the closed side)."""
-    sgn = ops.sign(e)
-    return -sgn * impact_force(ops, ops.abs(e) - gap, sgn * e_dot, k, b, c, dmax)
+    the moving part, ``-sign(e) F(|e| - gap)`` (Eq. 2 on the closed side). Each side is its
+    own lazily evaluated branch, so an open contact costs two comparisons."""
+    pushed_down = -_closed_force(ops, e - gap, e_dot, k, b, c, dmax)
+    pushed_up = _closed_force(ops, -e - gap, -e_dot, k, b, c, dmax)
+    return ops.where(e > gap, pushed_down, ops.where(e < -gap, pushed_up, 0.0))
 
 
 def friction_coefficient(ops, v: Expr, mu_s: float, mu_d: float, v_s: float,
@@ -101,11 +115,22 @@ def friction_coefficient(ops, v: Expr, mu_s: float, mu_d: float, v_s: float,
     ``v_s < |v| <= v_t``: ``sign(v) STEP(|v|, v_s, mu_s, v_t, mu_d)``;
     ``|v| > v_t``: ``sign(v) mu_d``. Requires ``v_s < v_t`` (stiction transition velocity
     below the friction transition velocity).
+
+    The stick band is a viscous element of slope ``mu'(0) = 1.5 mu_s / v_s``: with
+    ``x = v / v_s`` the STEP there is exactly ``mu_s x (3 - x^2) / 2``, evaluated in that form
+    (no clamping; Exudyn's ``IfThenElse`` only evaluates the branch it takes).
     """
-    av = ops.abs(v)
-    inner = step(ops, v, -v_s, -mu_s, v_s, mu_s)
-    outer = ops.where(av >= v_t, mu_d, step(ops, av, v_s, mu_s, v_t, mu_d))
-    return ops.where(av <= v_s, inner, ops.sign(v) * outer)
+    a1, a3 = 1.5 * mu_s / v_s, 0.5 * mu_s / v_s**3
+    stick = v * (a1 - a3 * v * v)
+    slip = ops.where(v >= v_t, mu_d, ops.where(v <= -v_t, -mu_d, ops.where(
+        v > 0.0, _stribeck(v, mu_s, mu_d, v_s, v_t), -_stribeck(-v, mu_s, mu_d, v_s, v_t))))
+    return ops.where(ops.abs(v) <= v_s, stick, slip)
+
+
+def _stribeck(av: Expr, mu_s: float, mu_d: float, v_s: float, v_t: float) -> Expr:
+    """``STEP(av, v_s, mu_s, v_t, mu_d)`` for ``v_s < av < v_t`` (no clamping needed)."""
+    s = (av - v_s) * (1.0 / (v_t - v_s))
+    return mu_s + (mu_d - mu_s) * (s * s * (3.0 - 2.0 * s))
 
 
 def stiffness_si(k_n_per_mm: float, b: float) -> float:

@@ -86,24 +86,36 @@ class LoadSignal:
         tau = t - t0
         return f0 + (b + c * tau) * tau
 
+    def _at(self, t: float) -> float:
+        """The table (half-step spacing) at time ``t``, linearly between its samples (exact
+        on the samples, which is where a fixed step puts every stage of RK4)."""
+        tab, dt = self.table(), self.step / 2
+        x = t / dt
+        i = min(max(int(x), 0), len(tab) - 2)
+        f = min(max(x - i, 0.0), 1.0)
+        return float(tab[i] + f * (tab[i + 1] - tab[i]))
+
     def install(self, mbs) -> list:
         """Attach the pre-step function that sets the variables (sampled records only);
         returns what must stay alive with ``mbs``."""
         if self.closed_form or self._vars is None:
             return []
-        tab, h = self.table(), self.step
+        import exudyn as exu
+
         f0, b, c, t0 = self._vars
-        last = (len(tab) - 3) // 2
+        start_of_step = exu.ConfigurationType.StartOfStep
 
         def prestep(mbs, t):
-            # Exudyn calls it before each step with the step's END time (checked in
-            # tests/models/test_drive.py): the step covers [t - h, t]
-            n = min(max(round(t / h) - 1, 0), last)
-            y0, ym, y1 = tab[2 * n], tab[2 * n + 1], tab[2 * n + 2]
+            # Exudyn calls it before each step with the step's END time; the step starts at
+            # the start-of-step configuration's time (adaptive steps vary, checked in
+            # tests/models/test_drive.py)
+            ta = mbs.systemData.GetTime(start_of_step)
+            h = t - ta if t > ta else self.step
+            y0, ym, y1 = self._at(ta), self._at(ta + h / 2), self._at(ta + h)
             f0.SetValue(y0)
             b.SetValue((4.0 * ym - 3.0 * y0 - y1) / h)
             c.SetValue(2.0 * (y1 - 2.0 * ym + y0) / (h * h))
-            t0.SetValue(n * h)
+            t0.SetValue(ta)
             return True
 
         mbs.SetPreStepUserFunction(prestep)

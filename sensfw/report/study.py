@@ -210,14 +210,25 @@ def _step_note(result) -> str:
     from ..pipeline import run_step
 
     steps = [run_step(result.store, k) for st in result.stages for k in st.keys]
-    smaller = [s for s in steps if s.get("step", result.study.solver.step)
+    adaptive = [s for s in steps if "adaptive" in s.get("integrator", "")]
+    smaller = [s for s in steps if s not in adaptive and s.get("step", result.study.solver.step)
                < result.study.solver.step * (1 - 1e-9)]
-    if not smaller:
-        return ""
-    why = sorted({s.get("step_limited_by", "divergence") for s in smaller})
-    return (f" {len(smaller)} of {len(steps)} runs used a smaller step (down to "
-            f"{min(s['step'] for s in smaller) * 1e6:.3g} µs), set per run so that RK4 resolves "
-            f"the model's fastest linearised eigenvalues (limited by: {'; '.join(why)}).")
+    note = ""
+    if smaller:
+        why = sorted({s.get("step_limited_by", "divergence") for s in smaller})
+        note += (f" {len(smaller)} of {len(steps)} runs used a smaller step (down to "
+                 f"{min(s['step'] for s in smaller) * 1e6:.3g} µs), set per run so that RK4 "
+                 f"resolves the model's fastest linearised eigenvalues (limited by: "
+                 f"{'; '.join(why)}).")
+    if adaptive:
+        mean = [s["mean_step"] for s in adaptive if "mean_step" in s]
+        note += (f" {len(adaptive)} of {len(steps)} runs, whose over-damped eigenvalues "
+                 f"(friction stick band, damped contacts) would have forced a much smaller "
+                 f"fixed step, were integrated with {adaptive[0]['integrator']} steps under "
+                 f"error control (tolerance solver.tolerance = {result.study.solver.tolerance:g})"
+                 + (f", mean step {min(mean) * 1e6:.3g}-{max(mean) * 1e6:.3g} µs" if mean
+                    else "") + ", resampled onto the output grid.")
+    return note
 
 
 def write_study_report(result, path: str | Path) -> Path:

@@ -97,8 +97,10 @@ class RunStore:
             data = buf.getvalue()
             _atomic_write(data_path, data)
             meta["sha256"] = hashlib.sha256(data).hexdigest()
-            # the step actually used: chosen by the model (auto_step), halved after divergence
-            for k in ("step", "substeps", "step_limited_by", "step_halvings"):
+            # the step actually used: chosen by the model (auto_step), halved after divergence;
+            # the integrator and, for adaptive runs, its tolerance and the steps it took
+            for k in ("step", "substeps", "step_limited_by", "step_halvings", "integrator",
+                      "tolerance", "steps", "rejected_steps", "mean_step"):
                 if k in result.signals.meta:
                     meta[k] = result.signals.meta[k]
         else:

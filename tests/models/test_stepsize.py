@@ -5,8 +5,11 @@ import numpy as np
 import pytest
 
 from sensfw.models.stepsize import (
+    ADAPTIVE_METHOD,
+    ADAPTIVE_REAL_LAMBDA_H,
     OSCILLATORY_LIMIT,
     REAL_LIMIT,
+    choose_integration,
     explicit_step,
     first_order_eigenvalues,
     grid_step,
@@ -68,3 +71,36 @@ def test_limits_sit_inside_rk4_stability_with_accuracy_to_spare():
     r = abs(rk4_amplification(1j * OSCILLATORY_LIMIT))
     assert 0.94 < r < 1.0
     assert abs(rk4_amplification(1j * 2.97)) > 1  # the stiff corner's mode at 10 us
+
+
+def test_a_stiff_viscous_element_is_integrated_adaptively():
+    """The friction stick band at its Table 1 minimum (|lambda| = 4.1e5 1/s) would need a
+    fixed RK4 step of 0.6 / 4.1e5 -> 1.43 us; the error-controlled DOPRI5 takes steps of at
+    most the requested 10 us instead."""
+    c, m = 4.1e5, 1.0
+    assert c / m * 1e-5 > ADAPTIVE_REAL_LAMBDA_H
+    lam = first_order_eigenvalues(np.eye(1) * m, np.zeros((1, 1)), np.array([[c]]))
+    got = choose_integration(lam, 1e-5, FS, "RK44", 1e-9)
+    assert got.adaptive and got.method == ADAPTIVE_METHOD == "DOPRI5"
+    assert got.tolerance == 1e-9 and got.limited_by == "real eigenvalue"
+    assert got.step == pytest.approx(1e-5) and got.substeps == 5
+    assert got.real_lambda_h == pytest.approx(4.1)  # at the largest step it may take
+    assert got.to_meta()["integrator"] == "DOPRI5 adaptive"
+    with pytest.raises(ValueError, match="tolerance"):
+        choose_integration(lam, 1e-5, FS, "RK44", 0.0)
+
+
+@pytest.mark.parametrize("c, k", [(1.71e5, 0.0), (6.1e4, 0.0), (0.0, 2.0e5**2),
+                                  (10.0, 1e6)])
+def test_moderately_stiff_and_oscillatory_runs_keep_fixed_steps(c, k):
+    """Over-damped elements within RK4's stability at the requested step (1.71e5 1/s: the
+    all-min corner of Table 1, |lambda h| = 1.71, 3.33 us; 6.1e4 1/s: a slide-bearing
+    contact at its softest and most damped, 8.33 us), an oscillatory limit, and a soft
+    system keep the fixed-step method they asked for."""
+    lam = first_order_eigenvalues(np.eye(1), np.array([[k]]), np.array([[c]]))
+    got = choose_integration(lam, 1e-5, FS, "RK44")
+    fixed = explicit_step(lam, 1e-5, FS)
+    assert not got.adaptive and got.method == "RK44"
+    assert (got.step, got.substeps, got.limited_by) == (fixed.step, fixed.substeps,
+                                                        fixed.limited_by)
+    assert c * 1e-5 <= ADAPTIVE_REAL_LAMBDA_H

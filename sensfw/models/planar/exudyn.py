@@ -95,41 +95,29 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
     return Built(SC=SC, mbs=mbs, sensors=handles, q0=q0, keep=keep)
 
 
-def solve(built: Built, fs: float, n_out: int, substeps: int, method: str
-          ) -> dict[str, np.ndarray]:
-    """Integrate at the fixed step ``1 / (fs substeps)`` and return every sensor's
-    ``n_out`` samples at ``fs``; raises ``exudyn.SolverError`` or returns short/non-finite
-    channels when the solver fails (the caller decides). Always resets the system."""
-    import exudyn as exu
+def solve(built: Built, fs: float, n_out: int, choice) -> tuple[dict[str, np.ndarray],
+                                                                  object]:
+    """Integrate as ``choice`` (a :class:`~sensfw.models.stepsize.StepChoice`: fixed steps on
+    the output grid, or error-controlled adaptive steps resampled onto it; see
+    :func:`sensfw.models.integration.solve`) and return every sensor's ``n_out`` samples at
+    ``fs`` with the integrator's statistics; raises ``exudyn.SolverError`` when the solver
+    fails. Always resets the system."""
+    from .. import integration
 
-    mbs, SC = built.mbs, built.SC
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.endTime = n_out / fs
-    ss.timeIntegration.numberOfSteps = n_out * substeps
-    ss.timeIntegration.automaticStepSize = False  # fixed steps on the output grid
-    ss.timeIntegration.verboseMode = 0
-    ss.timeIntegration.explicit.computeEndOfStepAccelerations = False
-    ss.timeIntegration.discontinuous.useRecommendedStepSize = False
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = 1.0 / fs
     try:
-        ok = mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, method))
-        channels = {}
-        if ok is not False:
-            for name, (s, comp) in built.sensors.items():
-                data = np.asarray(mbs.GetSensorStoredData(s))
-                channels[name] = np.ascontiguousarray(data[:n_out, 1 + comp])
-        return channels
+        return integration.solve(built.mbs, built.sensors, choice, n_out, fs)
     finally:
-        mbs.Reset()
-        SC.Reset()
+        built.mbs.Reset()
+        built.SC.Reset()
 
 
 def _link_function(ln, off: list[float], ops, contact, kind: str):
     """The CartesianSpringDamper user function of one link (reference offset removed)."""
 
     def force(mbs, t, itemNumber, u, v, k, d, offset):
-        fx, fy = ln.law(ops, (u[0] - off[0], u[1] - off[1]), (v[0], v[1]), contact)
+        # a zero offset is not subtracted: every node of a symbolic tree costs at every call
+        fx, fy = ln.law(ops, tuple(u[i] - off[i] if off[i] else u[i] for i in (0, 1)),
+                        (v[0], v[1]), contact)
         # Exudyn applies the returned force to marker 0 and its negative to marker 1
         return _vector([-fx, -fy, 0.0], kind)
 

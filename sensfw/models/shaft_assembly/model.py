@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 import numpy as np
 
@@ -33,7 +33,7 @@ from ..drive import LoadSignal
 from ..places import Place, resolve_places
 from ..planar import Contacts, Layout, Mechanism, statics
 from ..planar import exudyn as planar_exudyn
-from ..stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
+from ..stepsize import StepChoice, choose_integration, first_order_eigenvalues, grid_step
 from . import layout as mechanics
 from .table1 import GROUPS, PARAMETERS, Geometry
 
@@ -167,12 +167,9 @@ class ShaftAssembly(Model):
                            step=choice.step)
         n_out = excitation.n_samples
         try:
-            channels = planar_exudyn.solve(built, excitation.fs, n_out, choice.substeps,
-                                           solver.method)
+            channels, stats = planar_exudyn.solve(built, excitation.fs, n_out, choice)
         except exu.SolverError as exc:
             raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
-        if not channels:
-            raise SimulationError(self.name, "Exudyn solver did not finish", p)
         for name, x in channels.items():
             if len(x) != n_out or not np.all(np.isfinite(x)):
                 raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p,
@@ -185,7 +182,7 @@ class ShaftAssembly(Model):
                        f_inst=excitation.f_inst(t),
                        units={"force": "N", **{c: "m/s^2" for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
-                             **choice.to_meta()},
+                             **choice.to_meta(), **stats.to_meta()},
                        sweep_end=excitation.sweep_end)
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings,
@@ -195,6 +192,7 @@ class ShaftAssembly(Model):
         the fastest eigenvalues of the model linearised at its static state ``q0`` (the
         stick band of the slide-bearing friction, over-damped and stiff contacts)."""
         if not solver.auto_step:
-            return grid_step(solver.step, fs)
+            return replace(grid_step(solver.step, fs), method=solver.method)
         M, K, D = self.linear_matrices(p, q0)
-        return explicit_step(first_order_eigenvalues(M, K, D), solver.step, fs)
+        return choose_integration(first_order_eigenvalues(M, K, D), solver.step, fs,
+                                  solver.method, solver.tolerance)

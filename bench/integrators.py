@@ -1,0 +1,156 @@
+"""Candidate integrators for the stiff friction stick band (issue 15), on the same runs.
+
+Runs the screen run with the friction velocities at their minimum (``v-min``: the stick band
+at ``|lambda| h = 4.1`` for RK4 at 10 us) and the nominal run through Exudyn's integrators
+and prints, per candidate: right-hand-side evaluations and CPU seconds per simulated second,
+steps per CPU second, and the FRF change (dB RMS, Hv, crankshaft axial, 50 Hz - 5 kHz) and
+relative THD change against a reference (RK4 at half the step the linearisation asks for).
+CPU time, because the machine may be shared.
+
+Candidates: RK4 at the fixed step of the linearisation (``|lambda| h <= 0.6``; the former
+default) and at larger fixed steps; DOPRI5 and ODE23 with error control (sensor values
+resampled onto the sample grid, ``sensfw.models.integration``); the implicit trapezoidal rule
+(Exudyn's generalized-alpha with spectral radius 1, Newton tolerance 1e-6, modified Newton)
+and Exudyn's velocity Verlet (which Exudyn marks as under development and which evaluates
+velocity-dependent forces at the half-step velocity). Exudyn has no native connector for the
+laws of this model (power-law penalty contacts with clearance and ramped damping, friction
+driven by a contact's normal force); the last lines bound what native connectors could save:
+the right-hand side with the contact laws replaced by trivial symbolic functions, and with no
+user functions at all (native connectors of zero stiffness).
+
+    python bench/integrators.py [--duration 0.3] [--cases v-min,nominal]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from sensfw.excitation import Chirp
+from sensfw.models import integration
+from sensfw.models.shaft_assembly import PARAMETERS, ShaftAssembly
+from sensfw.models.stepsize import StepChoice, explicit_step, first_order_eigenvalues
+from sensfw.signal import frf, thd
+
+CASES = {
+    "nominal": PARAMETERS.nominal(),
+    "v-min": {**PARAMETERS.nominal(), "slide_v_stiction": 0.01, "slide_v_friction": 0.1},
+}
+STAGES = {"RK44": 4, "DOPRI5": 7, "ODE23": 4, "VelocityVerlet": 1}
+
+
+def run(model, p, ex, q0, choice: StepChoice, implicit: bool = False):
+    """One run with ``choice``; returns the crankshaft channel, CPU s and RHS evaluations."""
+    import exudyn as exu
+
+    built = model.build(p, ex, q0=q0)
+    mbs = built.mbs
+    ss = integration.simulation_settings(choice, ex.n_samples / ex.fs, ex.fs)
+    if implicit:  # trapezoidal rule: no numerical damping; a Newton tolerance that converges
+        ss.timeIntegration.generalizedAlpha.spectralRadius = 1.0
+        ss.timeIntegration.newton.relativeTolerance = 1e-6
+        ss.timeIntegration.newton.absoluteTolerance = 1e-6
+        ss.timeIntegration.adaptiveStep = False
+    c0 = time.process_time()
+    mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, choice.method))
+    cpu = time.process_time() - c0
+    it = mbs.sys["dynamicSolver"].it
+    steps = int(it.currentStepIndex) - 1
+    if implicit:
+        # a residual per Newton iteration and per step (numerical Jacobians not counted)
+        evals = int(it.newtonStepsCount) + steps
+    else:
+        evals = STAGES[choice.method] * (steps + int(it.rejectedAutomaticStepSizeSteps))
+    data = np.asarray(mbs.GetSensorStoredData(built.sensors["crank_axial"][0]))
+    n = ex.n_samples
+    x = (integration.resample(data[:, 0], data[:, 1], ex.fs, n) if choice.adaptive
+         else data[:n, 1])
+    mbs.Reset()
+    built.SC.Reset()
+    return x, cpu, evals, steps
+
+
+def scores(x, ex):
+    t = ex.time()
+    _, H = frf(ex.force(t), x, ex.fs, nperseg=1024, fmin=50, fmax=5000)
+    n = round(ex.duration * ex.fs)
+    return 20 * np.log10(np.abs(H)), thd(x[:n], ex.fs, ex.f_inst(t)[:n])
+
+
+def rhs_cost(model, p, ex, q0, variant: str) -> float:
+    """CPU us per right-hand side (RK4, 10 us) with the contact laws as built, as trivial
+    symbolic functions, or without user functions (native connectors of zero stiffness)."""
+    import sensfw.models.shaft_assembly as sa
+
+    saved = sa._link_function, sa._user_function
+    if variant != "model":
+        def trivial(ln, off, ops, contact, kind):
+            def force(mbs, t, itemNumber, u, v, k, d, offset):
+                return sa._vector([0.0 * u[0], 0.0, 0.0], kind)
+            return force
+        sa._link_function = trivial
+    if variant == "native":
+        sa._user_function = lambda mbs, item, function, name, kind: None
+    try:
+        _, cpu, evals, _ = run(model, p, ex, q0, StepChoice(step=1e-5, substeps=5))
+    finally:
+        sa._link_function, sa._user_function = saved
+    return cpu / evals * 1e6
+
+
+def main() -> None:
+    import exudyn as exu
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--duration", type=float, default=0.3)
+    ap.add_argument("--cases", default="v-min,nominal")
+    args = ap.parse_args()
+    exu.config.printToConsole = False
+    model = ShaftAssembly()
+    ex = Chirp(50, 5000, args.duration, 20000, 0.1, tail=0.05)
+    t_sim = ex.n_samples / ex.fs
+    for case in args.cases.split(","):
+        p = model.parameters().complete(CASES[case])
+        q0 = model.equilibrium(p)
+        h_lin = explicit_step(first_order_eigenvalues(*model.linear_matrices(p, q0)), 1e-5,
+                              ex.fs)
+        k = h_lin.substeps
+        ref, ref_cpu, *_ = run(model, p, ex, q0, StepChoice(step=h_lin.step / 2, substeps=2 * k))
+        db_ref, thd_ref = scores(ref, ex)
+        print(f"{case}: reference RK4 at {h_lin.step / 2 * 1e6:.3g} us ({ref_cpu:.1f} s CPU), "
+              f"THD {thd_ref:.3f} %; {ex.duration:g} s chirp + {ex.tail:g} s tail", flush=True)
+        adaptive = {"adaptive": True, "step": 1e-5, "substeps": 5}
+        candidates = [
+            (f"RK4 {h_lin.step * 1e6:.3g} us (linearisation)", StepChoice(step=h_lin.step,
+                                                                          substeps=k), False),
+            *[(f"RK4 {1e6 / (20000 * s):.3g} us", StepChoice(step=1 / (20000 * s), substeps=s),
+               False) for s in (10, 8) if s < k],
+            *[(f"DOPRI5 tol {tol:g}", StepChoice(method="DOPRI5", tolerance=tol, **adaptive),
+               False) for tol in (1e-8, 1e-9, 1e-10)],
+            *[(f"ODE23 tol {tol:g}", StepChoice(method="ODE23", tolerance=tol, **adaptive),
+               False) for tol in (1e-8, 1e-9)],
+            *[(f"trapezoidal {h:g} us", StepChoice(method="GeneralizedAlpha", step=h * 1e-6,
+                                                   substeps=round(50 / h)), True)
+              for h in (10, 5)],
+            *[(f"velocity Verlet {h:g} us", StepChoice(method="VelocityVerlet", step=h * 1e-6,
+                                                       substeps=round(50 / h)), False)
+              for h in (2.5, 1.25)],
+        ]
+        for label, choice, implicit in candidates:
+            x, cpu, evals, steps = run(model, p, ex, q0, choice, implicit)
+            db, th = scores(x, ex)
+            d_frf = float(np.sqrt(np.mean((db - db_ref) ** 2)))
+            print(f"  {label:32s} {evals / t_sim / 1e3:7.0f}k RHS/sim s {cpu / t_sim:6.2f} s CPU"
+                  f"/sim s {steps / cpu:9,.0f} steps/CPU s   FRF {d_frf:.3f} dB  THD "
+                  f"{100 * abs(th - thd_ref) / thd_ref:.2f} %", flush=True)
+        if case == "nominal":
+            us = {v: rhs_cost(model, p, ex, q0, v) for v in ("model", "trivial", "native")}
+            print(f"  CPU us per right-hand side: symbolic contact laws {us['model']:.2f}, "
+                  f"trivial symbolic functions {us['trivial']:.2f}, no user functions "
+                  f"{us['native']:.2f}")
+
+
+if __name__ == "__main__":
+    main()
