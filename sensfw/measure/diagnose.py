@@ -275,7 +275,7 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
     return out
 
 
-def _bases(h0: Hypothesis, nominal: Mapping[str, float] | None, extra: int = 2
+def _bases(h0: Hypothesis, nominal: Mapping[str, float] | None, extra: int = 1
            ) -> list[dict[str, float]]:
     """Base points to try each candidate from: H0's optimum, the nominal values, and up to
     ``extra`` points of H0's own search far (in coded distance) from its optimum with a chi2
@@ -317,9 +317,9 @@ def _screen(ev: Evaluator, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
         ws = ev.evaluate(h.spec, points, f"screen {h.name}")
         evaluated = [Evaluation(v, w) for v, w in zip(points, ws, strict=True)]
         predicted = []
-        for probe, e in zip(probes, evaluated[:len(probes)], strict=True):
-            if e.w is None:
-                continue
+        from_h0 = [(p, e) for p, e in zip(probes, evaluated[:len(probes)], strict=True)
+                   if e.w is not None]
+        for probe, e in sorted(from_h0, key=lambda pe: pe[1].chi2)[:1]:  # the best probe
             d = e.w - w0
             A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
             x, *_ = np.linalg.lstsq(A, -w0, rcond=None)

@@ -93,9 +93,9 @@ CASES = [
      ["friction@clutch_drive", "friction@clutch_crank", "damping@clutch_drive"]),
     ("preload@crankshaft:preload_force=15",
      ["preload@crankshaft", "preload@driveshaft", "added_mass@crankshaft"]),
-    ("contact_hardening@clutch_crank:hardening_increase=0.5",
-     ["contact_hardening@clutch_crank", "contact_hardening@bearing_l1",
-      "damping@clutch_crank"]),
+    ("contact_hardening@bearing_l1:hardening_increase=0.8",
+     ["contact_hardening@bearing_l1", "contact_hardening@bearing_l3",
+      "damping@bearing_l1"]),
 ]
 
 
