@@ -96,6 +96,7 @@ select = {{ threshold = 0.1 }}
 """
 
 
+@pytest.mark.slow  # real simulations through the CLI or a worker pool
 def test_oat_refuses_a_variable_with_no_run_but_keeps_the_runs(cli, tmp_path):
     study = tmp_path / "s.toml"
     study.write_text(STUDY.format(above=7000.0))  # k1 fails at both its min and its max
@@ -107,6 +108,7 @@ def test_oat_refuses_a_variable_with_no_run_but_keeps_the_runs(cli, tmp_path):
     assert len(records) == 13  # 2 x 6 + nominal: every run, failed or not, is kept
 
 
+@pytest.mark.slow  # real simulations through the CLI or a worker pool
 def test_oat_uses_one_end_and_says_so(cli, tmp_path):
     study = tmp_path / "s.toml"
     study.write_text(STUDY.format(above=1e9))  # only k1's min run fails

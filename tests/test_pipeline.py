@@ -116,6 +116,7 @@ surrogates = ["eq18"]
 """
 
 
+@pytest.mark.slow  # real simulations through the CLI or a worker pool
 def test_a_diverging_run_is_recorded_and_the_study_completes(cli, tmp_path):
     study = tmp_path / "faulty.toml"
     study.write_text(FAULTY.format(backend="serial"))

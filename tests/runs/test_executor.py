@@ -25,6 +25,7 @@ def specs(points, timeout=None):
                            ref) for p in points]
 
 
+@pytest.mark.slow  # real simulations through the CLI or a worker pool
 def test_process_pool_survives_crash_hang_and_divergence():
     points = [{"x1": 0.1}, {"x1": 3.0}, {"x2": 3.0}, {"x3": 3.0}, {"x1": -1.0}, {"x2": 1.0}]
     got = {}
