@@ -18,7 +18,8 @@ where it has one (``None`` for random noise), and either a closed-form expressio
 that a model evaluates inside its solver (:meth:`Excitation.force_expression`) or, for
 sampled signals, ``None`` (the model then feeds the samples step by step:
 :mod:`sensfw.models.drive`). :func:`make_excitation` rebuilds one from its
-:meth:`~Excitation.to_dict`.
+:meth:`~Excitation.to_dict`. (A little over 400 lines: the five kinds share one contract and
+are read together.)
 """
 
 from __future__ import annotations

@@ -11,9 +11,10 @@ from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
 from .calibrate import Coordinates, Evaluation, calibrate
-from .diagnose import Hypothesis, Log, _calibrate_candidate, _fill, _screen, calibration_variables
+from .diagnose import Hypothesis, Log, _calibrate_candidate, calibration_variables
 from .evaluate import Evaluator
 from .io import Measurement
+from .screening import neutral_values, screen
 from .synthetic import model_with_effects
 
 
@@ -49,11 +50,11 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         first = {k: float(start[k]) for k in want}
         (w,) = ev.evaluate(h.spec, [first], f"{effect} start")
         h.screen_best = min([Evaluation(first, w),
-                             Evaluation({**h0.fit.values, **_fill(eff)}, h0.fit.best.w)],
+                             Evaluation({**h0.fit.values, **neutral_values(eff)}, h0.fit.best.w)],
                             key=lambda e: e.chi2)
     else:
         (h0_cmp,) = ev.comparisons([ev.variant(None, h0.fit.values)], "base recalibrated")
-        _screen(ev, h0, [h], ev.output_comparisons(h0_cmp), log)
+        screen(ev, h0, [h], ev.output_comparisons(h0_cmp), log)
     log(f"calibrating {h.name} jointly with {', '.join(names)}")
     _calibrate_candidate(ev, h0, h, budget // 2, log)
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),

@@ -1,0 +1,95 @@
+"""Screening of candidate effects for diagnosis: from which base points each candidate is
+tried, at which probes, and where its joint calibration starts (:mod:`sensfw.measure.diagnose`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from .calibrate import Evaluation
+from .evaluate import Evaluator
+
+
+def base_points(h0, nominal: Mapping[str, float] | None, extra: int = 1
+           ) -> list[dict[str, float]]:
+    """Base points to try each candidate from: H0's optimum, the nominal values, and up to
+    ``extra`` points of H0's own search far (in coded distance) from its optimum with a chi2
+    within three times its best. H0 may have bent the base variables to mimic the missing
+    effect (a softer bearing for a heavier shaft); its search passed nearer the true values
+    on its way, and from there the effect can show what it explains."""
+    fit = h0.fit
+    out = [dict(fit.values)]
+    if nominal is not None:
+        out.append(dict(nominal))
+    z_best = fit.z
+    pool = [e for e in fit.evaluations if e.w is not None and e.chi2 <= 3 * fit.chi2]
+    pool.sort(key=lambda e: -float(np.max(np.abs(h0.coords.code(e.values) - z_best))))
+    for e in pool:
+        if len(out) >= 2 + extra:
+            break
+        z = h0.coords.code(e.values)
+        if all(np.max(np.abs(z - h0.coords.code(b))) > 0.1 for b in out):
+            out.append(dict(e.values))
+    return out
+
+
+def screen(ev: Evaluator, h0, hyps: Sequence, h0_cmp, log,
+            nominal: Mapping[str, float] | None = None) -> None:
+    """Each candidate at its probes (the neutral values make it vanish) from the base points
+    of :func:`base_points`, and at the point the linearised joint fit predicts from H0: the base
+    variables moved by H0's Jacobian and the effect scaled along the probe's direction, so
+    that they share what they explain (``min |w0 + J0 dtheta + c d|``, ``0 <= c <= 2``).
+    The candidate's score is the lowest chi2 simulated; its best point starts its joint
+    calibration. Costs a few simulations per probe."""
+    base = h0.fit.values
+    w0 = h0.fit.best.w
+    J = h0.fit.jacobian
+    bases = base_points(h0, nominal)
+    for h in hyps:  # one batch per hypothesis (its effect spec is part of every run)
+        probes = h.effect.probes(h0_cmp)
+        neutral = neutral_values(h.effect)
+        points = [{**b, **neutral, **probe} for b in bases for probe in probes]
+        ws = ev.evaluate(h.spec, points, f"screen {h.name}")
+        evaluated = [Evaluation(v, w) for v, w in zip(points, ws, strict=True)]
+        predicted = []
+        from_h0 = [(p, e) for p, e in zip(probes, evaluated[:len(probes)], strict=True)
+                   if e.w is not None]
+        for probe, e in sorted(from_h0, key=lambda pe: pe[1].chi2)[:1]:  # the best probe
+            d = e.w - w0
+            A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
+            x, *_ = np.linalg.lstsq(A, -w0, rcond=None)
+            c = float(np.clip(x[-1], 0.0, 2.0))
+            z = h0.coords.code(base) + (x[:-1] if J is not None and J.size else 0.0)
+            values = {**h0.coords.decode(np.clip(z, -1, 1)), **{
+                k: clip_to(h.coords.axes[h.coords.names.index(k)],
+                            neutral[k] + c * (v - neutral[k])) for k, v in probe.items()}}
+            predicted.append({**neutral, **probe, **values})
+        if predicted:
+            ws = ev.evaluate(h.spec, predicted, f"screen {h.name}")
+            evaluated += [Evaluation(v, w) for v, w in zip(predicted, ws, strict=True)]
+        best = min([Evaluation({**base, **neutral}, w0), *evaluated], key=lambda e: e.chi2)
+        h.screen_chi2, h.screen_best, h.screened = best.chi2, best, evaluated
+        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {best.chi2:.4g}")
+
+
+def other_start(h0, h) -> Evaluation | None:
+    """The best screened point of ``h`` whose base values are far (0.2 coded) from those of
+    its calibrated point."""
+    base = h0.coords
+    z = base.code(h.fit.values)
+    far = [e for e in h.screened if e.w is not None and
+           np.max(np.abs(base.code(e.values) - z)) > 0.2]
+    return min(far, key=lambda e: e.chi2) if far else None
+
+
+def clip_to(axis, value: float) -> float:
+    return float(np.clip(value, axis.low, axis.high))
+
+
+def neutral_values(effect) -> dict[str, float]:
+    """Effect parameters at their nominal values overridden by the neutral ones."""
+    return {**{p.name: p.nominal for p in effect.parameters()}, **effect.neutral}
+
+
