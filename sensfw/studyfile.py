@@ -96,4 +96,23 @@ def set_calibration(text: str, variables: list[str]) -> str:
     return tomlkit.dumps(doc)
 
 
-__all__ = ["add_effect", "set_calibration"]
+def set_nominals(text: str, values: Mapping[str, float],
+                 bounds: Mapping[str, tuple[float, float]]) -> str:
+    """``text`` with ``[parameters.NAME] nominal = value`` for each of ``values`` (a table's
+    other keys kept; a new table gets ``min``/``max`` from ``bounds``)."""
+    doc = tomlkit.parse(text)
+    params = doc.get("parameters")
+    if params is None:
+        params = tomlkit.table(is_super_table=True)
+        doc["parameters"] = params
+    for name, value in values.items():
+        entry = params.get(name)
+        if entry is None:
+            entry = params[name] = tomlkit.table()
+            lo, hi = bounds[name]
+            entry["min"], entry["max"] = float(lo), float(hi)
+        entry["nominal"] = float(value)
+    return tomlkit.dumps(doc)
+
+
+__all__ = ["add_effect", "set_calibration", "set_nominals"]

@@ -274,3 +274,50 @@ def augment(
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
 
+
+
+@app.command()
+@_user_errors
+def calibrate(
+    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    measured: Measured,
+    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/calibrate"),
+    budget: Annotated[int, typer.Option(help="simulations for the calibration")] = 120,
+    workers: Workers = None,
+    backend: Backend = None,
+    scheduler: Scheduler = None,
+    progress: ShowProgress = True,
+) -> None:
+    """Calibrate the study's base parameters (its calibration section) against measurements: values
+    with intervals, the error per level before and after, and the calibrated study."""
+    from ..measure.augment import recalibrate
+    from ..measure.session import load_measurements
+    from ..report.diagnosis import write_calibrate_report
+    from ..study import Study
+    from ..studyfile import set_calibration, set_nominals
+
+    study = Study.load(study_file)
+    meas = load_measurements(study, [str(m) for m in measured])
+    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
+        result = recalibrate(study, meas, runner, budget=budget,
+                             log=lambda s: console.print(f"[cyan]{s}"))
+    values = {k: v for k, v in result["base_parameters"].items()
+              if v != study.parameters[k].nominal}
+    text = set_nominals(study_file.read_text(encoding="utf-8"), values,
+                        {k: (study.parameters[k].min, study.parameters[k].max)
+                         for k in values})
+    text = set_calibration(text, result["variables"])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "study.toml").write_text(text, encoding="utf-8")
+    Study.load(out_dir / "study.toml")  # the calibrated file must itself be valid
+    comps = result.pop("_comparisons")
+    _json(out_dir / "calibrate.json", result)
+    write_calibrate_report(study, result, out_dir / "report.html", comps)
+    for c in result["calibration"]:
+        flags = f" ({'; '.join(c['flags'])})" if c["flags"] else ""
+        out.print(f"  {c['name']} = {c['value']:.4g} {c['unit']} "
+                  f"[{c['interval'][0]:.4g}, {c['interval'][1]:.4g}]{flags}")
+    for t in result["trajectory"]:
+        per = ", ".join(f"{e:.2f}" for e in t["error_per_level"])
+        out.print(f"  {t['step']:14s} error {t['error']:.3f} dB (per level: {per})")
+    out.print(f"-> {out_dir}/study.toml, {out_dir}/calibrate.json, {out_dir}/report.html")

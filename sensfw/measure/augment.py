@@ -10,6 +10,7 @@ from ..errors import SensfwError
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
+from . import discrepancy
 from .calibrate import Coordinates, Evaluation, calibrate
 from .diagnose import Hypothesis, Log, _calibrate_candidate, calibration_variables
 from .evaluate import Evaluator
@@ -81,3 +82,38 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
             "comparison": {k: [x.to_dict() for x in v] if v else None
                            for k, v in comps.items()},
             "_comparisons": comps}
+
+
+def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,
+                budget: int = 120, log: Log = lambda s: None) -> dict:
+    """Calibrate the study's base variables alone (hypothesis "parameters" of diagnosis):
+    the calibrated values with intervals and flags, and the error per level before and
+    after."""
+    names, source = calibration_variables(study, runner, log)
+    space = study.calibration_space(names)
+    ev = Evaluator(study, measurements, runner, space)
+    base = Coordinates.of(space)
+    nominal = space.nominal_row()
+    (nominal_cmp,) = ev.comparisons([ev.variant(None, nominal)], "nominal model")
+    if nominal_cmp is None:
+        raise SensfwError("the study's model failed at the measured level(s)")
+    log(f"calibrating {', '.join(names)} ({source})")
+    fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibration"), base,
+                    Evaluation(nominal, ev.weighted(nominal_cmp)), budget=budget, log=log)
+    (cal_cmp,) = ev.comparisons([ev.variant(None, fit.values)], "calibrated")
+    trajectory = [{"step": label, "error": ev.rms_db(c), "error_per_level":
+                   ev.rms_db_per_level(c), "levels": [m.level for m in measurements],
+                   "params": dict(values)}
+                  for label, c, values in (("nominal model", nominal_cmp, nominal),
+                                           ("calibrated", cal_cmp, fit.values))]
+    return {"variables": names, "variables_from": source, "channels": ev.channels,
+            "params": fit.values, "base_parameters": space.to_parameters(fit.values),
+            "calibration": fit.summary(), "chi2": fit.chi2, "n_entries": ev.entries.size(),
+            "fits_noise": discrepancy.fits(fit.best.w, len(base)),
+            "trajectory": trajectory, "n_simulations": ev.n_simulations,
+            "comparison": {"nominal model": [c.to_dict() for c in
+                                             ev.output_comparisons(nominal_cmp)],
+                           "calibrated": [c.to_dict() for c in
+                                          ev.output_comparisons(cal_cmp)]},
+            "_comparisons": {"nominal model": ev.output_comparisons(nominal_cmp),
+                             "calibrated": ev.output_comparisons(cal_cmp)}}

@@ -26,16 +26,40 @@ from .signatures import amplitude_dependence
 SMOOTH = 24  # 1/24 octave
 
 
-def third_octave_bands(fmin: float, fmax: float) -> list[tuple[float, float, float]]:
-    """(lower, centre, upper) of the base-10 one-third-octave bands (IEC 61260) inside
-    ``[fmin, fmax]``."""
+def octave_bands(fmin: float, fmax: float, fraction: int = 3
+                 ) -> list[tuple[float, float, float]]:
+    """(lower, centre, upper) of the base-10 1/``fraction``-octave bands (IEC 61260:
+    centres ``1000 * 10^(3n / (10 fraction))``) inside ``[fmin, fmax]``."""
     out = []
-    for n in range(-20, 60):
-        c = 1000.0 * 10 ** (n / 10)
-        lo, hi = c / 10 ** 0.05, c * 10 ** 0.05
-        if lo >= fmin and hi <= fmax:
+    step = 3.0 / (10.0 * fraction)  # decades per band
+    for n in range(int(np.floor(np.log10(fmin / 1000) / step)) - 1,
+                   int(np.ceil(np.log10(fmax / 1000) / step)) + 2):
+        c = 1000.0 * 10 ** (n * step)
+        lo, hi = c / 10 ** (step / 2), c * 10 ** (step / 2)
+        if lo >= fmin * (1 - 1e-9) and hi <= fmax * (1 + 1e-9):
             out.append((lo, c, hi))
     return out
+
+
+def third_octave_bands(fmin: float, fmax: float) -> list[tuple[float, float, float]]:
+    """The one-third-octave bands (IEC 61260) inside ``[fmin, fmax]``."""
+    return octave_bands(fmin, fmax, 3)
+
+
+#: fractions of an octave the comparison bands may take
+FRACTIONS = (3, 6, 12, 24, 48)
+
+
+def analysis_bands(fmin: float, fmax: float, at_least: int = 12
+                   ) -> list[tuple[float, float, float]]:
+    """The comparison bands of a sweep over ``[fmin, fmax]``: one-third octaves, or the
+    coarsest finer fraction that gives ``at_least`` bands (a narrow sweep, such as 70-110 Hz,
+    holds only one third-octave)."""
+    for fraction in FRACTIONS:
+        bands = octave_bands(fmin, fmax, fraction)
+        if len(bands) >= at_least:
+            return bands
+    return bands
 
 
 def frf_db(sig: Signals, channel: str, band: tuple[float, float], smooth: int = SMOOTH,
@@ -360,7 +384,7 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
     if len(f) != len(f2) or not np.allclose(f, f2):
         raise ValueError("model and measurement have different frequency axes; align first")
     bands = []
-    edges = third_octave_bands(*band)
+    edges = analysis_bands(*band)
     bm, bx = band_frf_db(model, channel, edges), band_frf_db(measured, channel, edges)
     # the measurement's scatter minus what the model's own record shows (nonlinear
     # distortion and leakage, shared by both): its random noise (floored at a quarter)

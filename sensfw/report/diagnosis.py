@@ -185,3 +185,23 @@ def write_augment_report(study, result: dict, path, comparisons: dict | None = N
                                           if k != "nominal model" and v is not None}),
                         "Resonance frequencies against level.")
     return page.write(path)
+
+
+def write_calibrate_report(study, result: dict, path, comparisons: dict | None = None
+                           ) -> Path:
+    page = Page(f"sensfw: base parameters calibrated ({study.name})",
+                f"{result['n_simulations']} simulations")
+    tr = result["trajectory"]
+    page.p(f"Calibrated {', '.join(result['variables'])} ({result['variables_from']}) on "
+           f"{len(tr[0]['levels'])} level(s), channels {', '.join(result['channels'])}: FRF "
+           f"error {tr[0]['error']:.2f} dB -> {tr[1]['error']:.2f} dB; "
+           + ("the noise explains what is left." if result["fits_noise"] else
+              "more is left than the noise explains."), "ok" if result["fits_noise"] else "note")
+    page.table(calibration_table(result["calibration"]))
+    page.table(pd.DataFrame([{"level": lv, **{t["step"]: t["error_per_level"][i]
+                                              for t in tr}}
+                             for i, lv in enumerate(tr[0]["levels"])]).set_index("level"))
+    if comparisons:
+        page.figure(frf_levels(comparisons, "FRF per level"), "Measured (black) against the "
+                    "nominal and the calibrated model.")
+    return page.write(path)
