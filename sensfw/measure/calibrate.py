@@ -176,7 +176,9 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
     Gauss-Newton steps (two damping values, run together) are tried until one lowers
     ``chi2`` — a failed pair costs two runs, not a new Jacobian — with the damping raised a
     hundredfold after each failed pair (Levenberg 1944, Marquardt 1963). Four failed pairs
-    in a row, or two iterations gaining less than ``tol`` (relative), end the search."""
+    in a row halve the difference step (a coarse difference misleads where chi2 curves
+    within it) and start again; at a step below 1.5 % of the range they, or two iterations
+    gaining less than ``tol`` (relative), end the search."""
     fixed = dict(fixed or {})
     fit = Fit(coords=coords, best=start, jacobian=None, evaluations=[start])
     if len(coords) == 0 or start.w is None:
@@ -236,6 +238,11 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
             slow = slow + 1 if gain < tol else 0
             if slow >= 2:
                 break
+        elif step > 0.015:  # the difference step may be too coarse where chi2 curves
+            step /= 2
+            lam = 1e-3
+            log(f"  iteration {it + 1}: no lower chi2 near {old:.4g}; difference step "
+                f"{step:g}")
         else:
             log(f"  iteration {it + 1}: no lower chi2 near {old:.4g}: converged")
             break

@@ -331,14 +331,23 @@ class LevelComparison:
     #: (:func:`band_noise`; 1.5 dB is a relative error of 0.25, an SNR of 12 dB; the
     #: first-order standard error underestimates the spread beyond that)
     noise_limit_db: float = 1.5
+    #: largest total scatter (dB) of a used band's measured FRF (noise and distortion, before
+    #: the model's share is taken out): beyond it the measured band level says little
+    scatter_limit_db: float = 3.0
 
     @property
     def used_bands(self) -> list[dict]:
         """Bands within ``dynamic_range`` dB of the strongest measured band whose own noise
-        error is below ``noise_limit_db`` (weaker ones are noise-limited on a shaker rig)."""
+        error is below ``noise_limit_db`` and whose total scatter is below
+        ``scatter_limit_db`` (weaker ones are noise-limited on a shaker rig)."""
         top = max(b["measured_db"] for b in self.bands)
+
+        def ok(b, key, limit):
+            return b.get(key) is None or b[key] <= limit
+
         return [b for b in self.bands if b["measured_db"] >= top - self.dynamic_range
-                and (b.get("noise_db") is None or b["noise_db"] <= self.noise_limit_db)]
+                and ok(b, "noise_db", self.noise_limit_db)
+                and ok(b, "scatter_db", self.scatter_limit_db)]
 
     @property
     def noise_floor_db(self) -> float:
@@ -390,7 +399,8 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
     # distortion and leakage, shared by both): its random noise (floored at a quarter)
     e_meas, e_model = band_noise(measured, channel, edges), band_noise(model, channel, edges)
     noise = np.sqrt(np.maximum(e_meas**2 - e_model**2, (0.25 * e_meas) ** 2))
-    for (lo, c, hi), a, b, e in zip(edges, bm, bx, noise, strict=True):
+    to_db = 20 / np.log(10) / np.sqrt(2)  # standard error in dB: ln|1 + e z| ~ Re(e z)
+    for (lo, c, hi), a, b, e, et in zip(edges, bm, bx, noise, e_meas, strict=True):
         sel = (f >= lo) & (f < hi)
         if sel.sum() == 0 or not (np.isfinite(a) and np.isfinite(b)):
             continue
@@ -398,9 +408,8 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
         bands.append({"centre_hz": c, "lower_hz": lo, "upper_hz": hi,
                       "model_db": float(a), "measured_db": float(b),
                       "mean_db": float(a - b), "rms_db": float(np.sqrt(np.mean(d**2))),
-                      # standard error in dB: ln|1 + e z| ~ Re(e z), var e^2 / 2
-                      "noise_db": float(20 / np.log(10) * e / np.sqrt(2))
-                      if np.isfinite(e) else None})
+                      "noise_db": float(to_db * e) if np.isfinite(e) else None,
+                      "scatter_db": float(to_db * et) if np.isfinite(et) else None})
     pm = fit_resonances(f, Hm, resonances(f, dbm))
     px = fit_resonances(f, Hx, resonances(f, dbx))
     res = match_resonances(pm, px)

@@ -42,7 +42,7 @@ from . import discrepancy
 from .calibrate import Coordinates, Evaluation, Fit, calibrate
 from .evaluate import Evaluator
 from .io import Measurement
-from .screening import other_start, screen
+from .screening import neutral_values, other_start, screen
 from .synthetic import model_with_effects
 
 Log = Callable[[str], None]
@@ -97,7 +97,7 @@ class Hypothesis:
     def k(self) -> int:
         return len(self.coords)
 
-    def row(self, n: int, h0: Hypothesis | None, evaluator: Evaluator) -> dict:
+    def row(self, n: int, h0: Hypothesis | None) -> dict:
         fit = self.fit
         chi2 = fit.chi2
         out = {"hypothesis": self.name,
@@ -111,10 +111,6 @@ class Hypothesis:
         if h0 is not None and h0.fit is not None:
             out["delta_bic"] = (h0.fit.chi2 + h0.k * math.log(n)) - out["bic"]
         return out
-
-
-def _effect_axes(effect) -> list:
-    return list(effect.parameters())
 
 
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
@@ -147,7 +143,10 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     log(f"{len(hyps)} candidate(s) after the signature classes {sorted(found) or '(none)'}")
     screen(ev, h0, hyps, h0_cmp, log, nominal_values)
     ranked = sorted(hyps, key=lambda h: h.screen_chi2)
-    chosen = [h for h in ranked[:refine] if h.screen_chi2 < h0.fit.chi2 - 2.0]
+    # worth a joint calibration: the screen already gained more than the candidate's
+    # parameters cost in BIC
+    chosen = [h for h in ranked[:refine]
+              if h.screen_chi2 < h0.fit.chi2 - (h.k - h0.k) * math.log(n)]
     spent = ev.n_simulations
     for i, h in enumerate(chosen):
         left = max(budget - (ev.n_simulations - spent), 0)
@@ -168,17 +167,22 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             if again.chi2 < lead.fit.chi2:
                 again.evaluations = lead.fit.evaluations + again.evaluations
                 lead.fit = again
+    if chosen:
+        _refresh_h0(ev, h0, chosen, budget - (ev.n_simulations - spent), log)
     for h in ranked:  # screened only: their best evaluated point stands
         if h.fit is None:
             h.fit = Fit(coords=h.coords, best=h.screen_best, jacobian=None,
                         evaluations=[h.screen_best])
             h.notes.append("screened only (not among the best candidates)")
+        if h.fit.chi2 > h0.fit.chi2:  # at its neutral values a candidate is H0
+            h.fit.best = Evaluation({**h0.fit.values, **neutral_values(h.effect)},
+                                    h0.fit.best.w)
+            h.notes.append("H0 recalibrated ended better: the effect at its neutral values")
     if len(measurements) >= 2:
         for h in [h0, *chosen]:
             h.heldout = _heldout(ev, h, log)
     verdict, reason = _verdict(h0, chosen, n, min_delta_bic, len(measurements))
-    rows = [h0.row(n, None, ev)] + [h.row(n, h0, ev) for h in
-                                    sorted(hyps, key=lambda h: h.fit.chi2)]
+    rows = [h0.row(n, None)] + [h.row(n, h0) for h in sorted(hyps, key=lambda h: h.fit.chi2)]
     winner = next((h for h in chosen if h.name == verdict), None)
     best_all = None
     if winner is not None:
@@ -271,7 +275,7 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
             continue
         for pl in [place] if place else fits:
             eff = cls(attach=pl)
-            coords = Coordinates(base_coords.axes + Coordinates.of(None, _effect_axes(eff)).axes)
+            coords = Coordinates(base_coords.axes + Coordinates.of(None, eff.parameters()).axes)
             out.append(Hypothesis(eff, pl, coords))
     return out
 
@@ -305,6 +309,30 @@ def _calibrate_candidate(ev: Evaluator, h0: Hypothesis, h: Hypothesis, budget: i
             break
     if h.fit.chi2 > h0.fit.chi2:  # cannot happen from the neutral start; guard the claim
         raise SensfwError(f"internal: {h.name} ended worse than the hypothesis it extends")
+
+
+def _refresh_h0(ev: Evaluator, h0: Hypothesis, chosen: Sequence[Hypothesis], budget: int,
+                log: Log) -> None:
+    """Give "parameters only" the same chance as the candidates: each joint calibration
+    also moved the base variables, and part of its gain may be base values H0's own
+    search missed. H0 is evaluated at every calibrated candidate's base values (without the
+    effect) and, if one of them is better, calibrated again from there. Otherwise an
+    effect would be credited with what better base values alone achieve."""
+    names = set(h0.coords.names)
+    points = [{k: v for k, v in h.fit.values.items() if k in names} for h in chosen]
+    ws = ev.evaluate(None, points, "H0 at the candidates' base values")
+    starts = [Evaluation(p, w) for p, w in zip(points, ws, strict=True) if w is not None]
+    best = min(starts, key=lambda e: e.chi2, default=None)
+    if best is None or best.chi2 >= h0.fit.chi2:
+        return
+    log(f"H0 again from a candidate's base values (chi2 {h0.fit.chi2:.4g} -> "
+        f"{best.chi2:.4g} before calibrating)")
+    again = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), h0.coords, best,
+                      budget=max(budget, 4 * len(h0.coords)), log=log)
+    again.evaluations = h0.fit.evaluations + again.evaluations
+    h0.notes.append(f"calibrated again from a candidate's base values: chi2 "
+                    f"{h0.fit.chi2:.4g} -> {again.chi2:.4g}")
+    h0.fit = again
 
 
 def _heldout(ev: Evaluator, h: Hypothesis, log: Log) -> float | None:

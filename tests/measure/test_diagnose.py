@@ -122,31 +122,41 @@ def test_noise_and_offsets_never_give_an_effect(noise, seed, study, runner, tmp_
 
 
 def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_path):
-    """The commands end to end on a flexible mode: diagnose.json names it; augment starts
-    from it, writes a study with the effect, its values and [calibration], and the error
-    falls along nominal -> base recalibrated -> jointly calibrated."""
+    """The commands end to end on a flexible mode measured at two levels: diagnose.json
+    names it, with the held-out-level error of each calibrated hypothesis next to its BIC;
+    augment starts from it, writes a study with the effect, its values and [calibration],
+    and the error falls at each level along nominal -> base recalibrated -> jointly
+    calibrated."""
     import tomlkit
 
     hidden = "flexible_mode@driveshaft:flex_frequency=1800,flex_damping=0.02,flex_mass=0.03"
-    sig, _ = synthesize(study, sets=OFFSETS, effects=[hidden], amplitude=0.1,
-                        rig=Rig(noise=0.02, seed=5))
-    m = write_csv(tmp_path / "m.csv", sig, level=0.1)
+    files = []
+    for i, level in enumerate((0.05, 0.1)):
+        sig, _ = synthesize(study, sets=OFFSETS, effects=[hidden], amplitude=level,
+                            rig=Rig(noise=0.02, seed=5 + i))
+        files += ["-m", write_csv(tmp_path / f"m{i}.csv", sig, level=level)]
     study_file = tmp_path / "s.toml"
     study_file.write_text(tomlkit.dumps(short_quick()))
-    proc = cli("diagnose", study_file, "-m", m, "--out", tmp_path / "d", "--no-progress",
+    proc = cli("diagnose", study_file, *files, "--out", tmp_path / "d", "--no-progress",
                "--candidates", "flexible_mode@driveshaft,added_mass@driveshaft",
-               timeout=1200)
+               timeout=1800)
     assert proc.returncode == 0, proc.stderr
     diag = json.loads((tmp_path / "d" / "diagnose.json").read_text())
     assert diag["verdict"] == "flexible_mode@driveshaft"
-    assert "data:image/png;base64" in (tmp_path / "d" / "report.html").read_text()
-    proc = cli("augment", study_file, "-m", m, "--effect", "flexible_mode@driveshaft",
+    winner = next(r for r in diag["ranking"] if r["hypothesis"] == diag["verdict"])
+    assert winner["heldout_chi2_per_entry"] < diag["parameters_only"]["heldout_chi2_per_entry"]
+    html = (tmp_path / "d" / "report.html").read_text()
+    assert "data:image/png;base64" in html and "held-out" in html
+    proc = cli("augment", study_file, *files, "--effect", "flexible_mode@driveshaft",
                "--start-from", tmp_path / "d" / "diagnose.json", "--out", tmp_path / "a",
-               "--no-progress", timeout=1200)
+               "--no-progress", timeout=1800)
     assert proc.returncode == 0, proc.stderr
     aug = json.loads((tmp_path / "a" / "augment.json").read_text())
-    errors = [t["error"] for t in aug["trajectory"]]
-    assert errors[0] > errors[1] > errors[3], errors  # nominal > base > jointly calibrated
+    steps = {t["step"]: t for t in aug["trajectory"]}
+    for i in range(2):  # at each level: nominal > base recalibrated > jointly calibrated
+        per = [steps[k]["error_per_level"][i] for k in ("nominal model", "base recalibrated",
+                                                        "jointly calibrated")]
+        assert per[0] > per[1] > per[2], per
     written = tomllib.loads((tmp_path / "a" / "study.toml").read_text())
     assert written["model"]["options"]["effects"] == [{"name": "flexible_mode",
                                                        "attach": "driveshaft"}]
