@@ -12,7 +12,13 @@ from ..runs import Runner
 from ..study import Study
 from . import discrepancy
 from .calibrate import Coordinates, Evaluation, calibrate
-from .diagnose import Hypothesis, Log, _calibrate_candidate, calibration_variables
+from .diagnose import (
+    Hypothesis,
+    Log,
+    _calibrate_candidate,
+    calibration_variables,
+    widen_for_roughness,
+)
 from .evaluate import Evaluator
 from .io import Measurement
 from .screening import neutral_values, screen
@@ -40,6 +46,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "base calibration"), base,
                        Evaluation(nominal, ev.weighted(nominal_cmp)), budget=budget // 3,
                        log=log)
+    widen_for_roughness(ev, h0.fit, log)
     h = Hypothesis(eff, eff.attach, Coordinates(base.axes + Coordinates.of(
         None, eff.parameters()).axes))
     added = {**h0.fit.values, **{p.name: p.nominal for p in eff.parameters()}}
@@ -100,6 +107,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     log(f"calibrating {', '.join(names)} ({source})")
     fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibration"), base,
                     Evaluation(nominal, ev.weighted(nominal_cmp)), budget=budget, log=log)
+    scatter = widen_for_roughness(ev, fit, log)
     (cal_cmp,) = ev.comparisons([ev.variant(None, fit.values)], "calibrated")
     trajectory = [{"step": label, "error": ev.rms_db(c), "error_per_level":
                    ev.rms_db_per_level(c), "levels": [m.level for m in measurements],
@@ -110,6 +118,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
             "params": fit.values, "base_parameters": space.to_parameters(fit.values),
             "calibration": fit.summary(), "chi2": fit.chi2, "n_entries": ev.entries.size(),
             "fits_noise": discrepancy.fits(fit.best.w, len(base)),
+            "model_scatter_db": scatter,
             "trajectory": trajectory, "n_simulations": ev.n_simulations,
             "comparison": {"nominal model": [c.to_dict() for c in
                                              ev.output_comparisons(nominal_cmp)],

@@ -39,7 +39,7 @@ from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
 from . import discrepancy
-from .calibrate import Coordinates, Evaluation, Fit, calibrate
+from .calibrate import Coordinates, Evaluation, Fit, calibrate, roughness
 from .evaluate import Evaluator
 from .io import Measurement
 from .screening import neutral_values, other_start, screen
@@ -136,6 +136,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     h0 = Hypothesis(None, "", base_coords)
     h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), base_coords,
                        start, budget=budget // 4, log=log)
+    scatter = widen_for_roughness(ev, h0.fit, log)
     (h0_all,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
     h0_cmp = ev.output_comparisons(h0_all)
     found = _signature_classes(h0_cmp)
@@ -195,7 +196,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
         errors={"nominal": ev.rms_db(nominal_cmp), "parameters": ev.rms_db(h0_all),
                 "best": ev.rms_db(best_all) if best_all else None},
         criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3,
-                  "model_db": discrepancy.MODEL_DB, "thd_db": discrepancy.THD_DB})
+                  "model_db": discrepancy.MODEL_DB, "thd_db": discrepancy.THD_DB,
+                  "model_scatter_db": scatter})
 
 
 @dataclass
@@ -309,6 +311,26 @@ def _calibrate_candidate(ev: Evaluator, h0: Hypothesis, h: Hypothesis, budget: i
             break
     if h.fit.chi2 > h0.fit.chi2:  # cannot happen from the neutral start; guard the claim
         raise SensfwError(f"internal: {h.name} ended worse than the hypothesis it extends")
+
+
+def widen_for_roughness(ev: Evaluator, fit: Fit, log: Log) -> float:
+    """Add the model's own scatter around ``fit``'s optimum (:func:`calibrate.roughness`)
+    to every entry's standard error, so that no hypothesis is credited with fitting the
+    irregular part of a stick-slip response; the residuals and Jacobian of ``fit`` are
+    reweighted in place. Returns the median scatter (dB)."""
+    sigma = np.array([x for part in ev.entries.sigma for x in part])
+    rough = roughness(lambda pts: ev.evaluate(None, pts, "model scatter"), fit.coords, fit,
+                      sigma)
+    scale = ev.add_scatter(rough)
+    for e in fit.evaluations:
+        if e.w is not None:
+            e.w = e.w * scale
+    if fit.jacobian is not None:
+        fit.jacobian = fit.jacobian * scale[:, None]
+    med = float(np.median(rough)) if len(rough) else 0.0
+    log(f"model scatter around the calibrated point: median {med:.2f} dB, largest "
+        f"{float(np.max(rough, initial=0.0)):.2f} dB")
+    return med
 
 
 def _refresh_h0(ev: Evaluator, h0: Hypothesis, chosen: Sequence[Hypothesis], budget: int,

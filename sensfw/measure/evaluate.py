@@ -85,6 +85,19 @@ class Evaluator:
                 self.entries = discrepancy.Entries.of(first)
         return out
 
+    def add_scatter(self, extra_db: np.ndarray) -> np.ndarray:
+        """Widen every entry's standard error by the model's own scatter (dB, one value per
+        entry: ``sigma^2 + extra^2``) and return the factor ``sigma_old / sigma_new`` that
+        rescales residuals and Jacobians weighted before."""
+        old = np.array([x for part in self.entries.sigma for x in part])
+        new = np.sqrt(old**2 + np.asarray(extra_db, float) ** 2)
+        sigma, i = [], 0
+        for part in self.entries.sigma:
+            sigma.append(tuple(new[i:i + len(part)]))
+            i += len(part)
+        self.entries = discrepancy.Entries(self.entries.bands, self.entries.thd, tuple(sigma))
+        return old / new
+
     def _entries(self, levels: Sequence[int] | None) -> discrepancy.Entries:
         if levels is None:
             return self.entries
