@@ -2,6 +2,7 @@
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -47,8 +48,9 @@ def test_quick_study_runs_the_three_steps(quick):
 
 
 @pytest.mark.slow
-def test_rerun_computes_nothing_and_gives_identical_results(quick, cli):
-    out, _ = quick
+def test_rerun_computes_nothing_and_gives_identical_results(quick, cli, tmp_path):
+    out = tmp_path / "rerun"  # a copy: the session's folder stays as `sensfw run` left it
+    shutil.copytree(quick[0], out)
     before = json.loads((out / "results.json").read_text())
     proc = cli("run", QUICK, "--out", out, "--no-progress", "--no-report")
     assert proc.returncode == 0, proc.stderr

@@ -155,7 +155,8 @@ def diagnose(
     candidates: Annotated[str | None, typer.Option(
         help="comma-separated effects, NAME or NAME@PLACE (default: every registered effect "
              "at every place it fits)")] = None,
-    budget: Annotated[int, typer.Option(help="simulations for the calibrations")] = 300,
+    budget: Annotated[int, typer.Option(
+        help="simulations for the whole diagnosis (H0, screen, calibrations)")] = 300,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,

@@ -165,7 +165,7 @@ def _jacobian_points(z: np.ndarray, h: np.ndarray) -> tuple[list[np.ndarray], np
 
 def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
               fixed: Mapping[str, float] | None = None, max_iter: int = 12,
-              step: float = 0.05, budget: int | None = None, tol: float = 1e-3,
+              step: float = 0.05, budget: int | None = None, tol: float = 3e-3,
               log: Callable[[str], None] = lambda s: None) -> Fit:
     """Minimise ``chi2`` over ``coords`` from ``start`` (an evaluated point: its ``values``
     hold every axis, plus any ``fixed`` values passed through unchanged). ``evaluate`` maps
@@ -178,7 +178,9 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
     hundredfold after each failed pair (Levenberg 1944, Marquardt 1963). Four failed pairs
     in a row halve the difference step (a coarse difference misleads where chi2 curves
     within it) and start again; at a step below 1.5 % of the range they, or two iterations
-    gaining less than ``tol`` (relative), end the search."""
+    in a row gaining less than ``tol`` (relative) or less than 0.5 in ``chi2`` (together
+    under one unit, the change that marks one standard deviation of a parameter's profile
+    likelihood), end the search."""
     fixed = dict(fixed or {})
     fit = Fit(coords=coords, best=start, jacobian=None, evaluations=[start])
     if len(coords) == 0 or start.w is None:
@@ -251,7 +253,7 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
             fit.best = cand
             gain = (old - cand.chi2) / max(old, 1e-300)
             log(f"  iteration {it + 1}: chi2 {old:.4g} -> {cand.chi2:.4g}")
-            slow = slow + 1 if gain < tol else 0
+            slow = slow + 1 if gain < tol or old - cand.chi2 < 0.5 else 0
             if slow >= 2:
                 break
         elif np.max(steps) > 0.015:  # the difference may be too coarse where chi2 curves

@@ -38,7 +38,7 @@ from ..models.places import fitting_places
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
-from . import discrepancy
+from . import discrepancy, signatures
 from .calibrate import Coordinates, Evaluation, Fit, calibrate, roughness
 from .evaluate import Evaluator
 from .io import Measurement
@@ -119,8 +119,11 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
              ) -> DiagnoseResult:
     """Diagnose the missing physics (module docstring). ``candidates`` are effect names
     (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it fits);
-    ``budget`` caps the simulations of the calibrations (screens and held-out predictions
-    come on top, a few per candidate)."""
+    ``budget`` caps the simulations of the whole diagnosis: H0's calibration takes at most
+    a fifth, the screen about ten per screened candidate (two each for the first look when
+    there are many, :func:`~sensfw.measure.screening.screen`), the joint calibrations share
+    what is left (each gets at least a few Jacobians); the held-out predictions, one per
+    level and calibrated hypothesis, come on top."""
     names, source = calibration_variables(study, runner, log)
     space = study.calibration_space(names)
     ev = Evaluator(study, measurements, runner, space)
@@ -135,7 +138,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     log(f"H0: calibrating {', '.join(names)} ({source})")
     h0 = Hypothesis(None, "", base_coords)
     h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), base_coords,
-                       start, budget=budget // 4, log=log)
+                       start, budget=budget // 5, log=log)
     scatter = widen_for_roughness(ev, h0.fit, log)
     (h0_all,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
     h0_cmp = ev.output_comparisons(h0_all)
@@ -148,16 +151,17 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     # parameters cost in BIC
     chosen = [h for h in ranked[:refine]
               if h.screen_chi2 < h0.fit.chi2 - (h.k - h0.k) * math.log(n)]
-    spent = ev.n_simulations
     for i, h in enumerate(chosen):
-        left = max(budget - (ev.n_simulations - spent), 0)
+        left = max(budget - ev.n_simulations, 0)
         log(f"calibrating {h.name} jointly with the base variables")
         _calibrate_candidate(ev, h0, h, left // max(len(chosen) - i, 1), log)
-    if chosen:  # the leader again from its best start on another base: the joint space has
+    lead = min(chosen, key=lambda h: h.fit.chi2) if chosen else None
+    if lead is not None and not discrepancy.fits(lead.fit.best.w, lead.k):
+        # the leader again from its best start on another base: the joint space has
         # valleys where one base value trades against the effect (a heavier shaft against
         # a softer friction band), and a second start is cheaper than a wrong verdict
-        lead = min(chosen, key=lambda h: h.fit.chi2)
-        left = budget - (ev.n_simulations - spent)
+        # (not needed where the leader already explains the measurement to its noise)
+        left = budget - ev.n_simulations
         other = other_start(h0, lead)
         if other is not None and left > 4 * len(lead.coords):
             log(f"second start for {lead.name}")
@@ -169,7 +173,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
                 again.evaluations = lead.fit.evaluations + again.evaluations
                 lead.fit = again
     if chosen:
-        _refresh_h0(ev, h0, chosen, budget - (ev.n_simulations - spent), log)
+        _refresh_h0(ev, h0, chosen, budget - ev.n_simulations, log)
     for h in ranked:  # screened only: their best evaluated point stands
         if h.fit is None:
             h.fit = Fit(coords=h.coords, best=h.screen_best, jacobian=None,
@@ -240,21 +244,11 @@ def _signature_classes(comparisons) -> dict:
     """The amplitude-dependence classes of the discrepancy (several levels only)."""
     if comparisons is None or len(comparisons) < 2:
         return {}
-    try:
-        from .signatures import classes
-    except ImportError:  # no classifier: allow every candidate
-        return {}
-    return classes(comparisons)
+    return signatures.classes(comparisons)
 
 
 def _allows(cls, found: Mapping) -> bool:
-    if not found:
-        return True
-    try:
-        from .signatures import allows
-    except ImportError:
-        return True
-    return allows(cls, found)
+    return not found or signatures.allows(cls, found)
 
 
 def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: Log

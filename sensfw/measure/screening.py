@@ -36,51 +36,78 @@ def base_points(h0, nominal: Mapping[str, float] | None, extra: int = 1
 
 
 def screen(ev: Evaluator, h0, hyps: Sequence, h0_cmp, log,
-            nominal: Mapping[str, float] | None = None) -> None:
+           nominal: Mapping[str, float] | None = None, keep: int = 8) -> None:
     """Each candidate at its probes (the neutral values make it vanish) from the base points
     of :func:`base_points`, and at the point the linearised joint fit predicts from H0: the base
     variables moved by H0's Jacobian and the effect scaled along the probe's direction, so
     that they share what they explain (``min |w0 + J0 dtheta + c d|``, ``0 <= c <= 2``).
     The candidate's score is the lowest chi2 simulated; its best point starts its joint
-    calibration. Costs a few simulations per probe."""
+    calibration. Costs about ten simulations per candidate.
+
+    More than ``keep`` candidates (every effect at every place: 44 on the shaft model) get a
+    first look of two simulations each, the middle probe from H0's optimum and its
+    linearised joint fit, and only the ``keep`` best of that look are screened fully."""
+    bases = base_points(h0, nominal)
+    for h in hyps:
+        h.screened = []
+    if len(hyps) > keep:
+        for h in hyps:
+            probes = h.effect.probes(h0_cmp)
+            _probe(ev, h0, h, bases[:1], probes[len(probes) // 2:len(probes) // 2 + 1])
+        hyps = sorted(hyps, key=lambda h: h.screen_chi2)[:keep]
+        log(f"  the {keep} best of a first look (one probe from H0, its linearised fit): "
+            f"{', '.join(h.name for h in hyps)}")
+    for h in hyps:
+        _probe(ev, h0, h, bases, h.effect.probes(h0_cmp))
+        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {h.screen_chi2:.4g}")
+
+
+def _probe(ev: Evaluator, h0, h, bases: Sequence[Mapping[str, float]],
+           probes: Sequence[Mapping[str, float]]) -> None:
+    """``h`` at ``probes`` from ``bases`` and at the linearised joint fit of its best probe
+    from H0's optimum (:func:`screen`); points ``h`` was already screened at are not run
+    again. Updates ``h.screened``, ``h.screen_best`` and ``h.screen_chi2``."""
     base = h0.fit.values
     w0 = h0.fit.best.w
     J = h0.fit.jacobian
-    bases = base_points(h0, nominal)
-    for h in hyps:  # one batch per hypothesis (its effect spec is part of every run)
-        probes = h.effect.probes(h0_cmp)
-        neutral = neutral_values(h.effect)
-        points = [{**b, **neutral, **probe} for b in bases for probe in probes]
-        ws = ev.evaluate(h.spec, points, f"screen {h.name}")
-        evaluated = [Evaluation(v, w) for v, w in zip(points, ws, strict=True)]
-        predicted = []
-        from_h0 = [(p, e) for p, e in zip(probes, evaluated[:len(probes)], strict=True)
-                   if e.w is not None]
-        for probe, e in sorted(from_h0, key=lambda pe: pe[1].chi2)[:1]:  # the best probe
-            d = e.w - w0
-            A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
-            x, *_ = np.linalg.lstsq(A, -w0, rcond=None)
-            c = float(np.clip(x[-1], 0.0, 2.0))
-            z = h0.coords.code(base) + (x[:-1] if J is not None and J.size else 0.0)
-            values = {**h0.coords.decode(np.clip(z, -1, 1)), **{
-                k: clip_to(h.coords.axes[h.coords.names.index(k)],
-                            neutral[k] + c * (v - neutral[k])) for k, v in probe.items()}}
-            predicted.append({**neutral, **probe, **values})
-        if predicted:
-            ws = ev.evaluate(h.spec, predicted, f"screen {h.name}")
-            evaluated += [Evaluation(v, w) for v, w in zip(predicted, ws, strict=True)]
-        best = min([Evaluation({**base, **neutral}, w0), *evaluated], key=lambda e: e.chi2)
-        h.screen_chi2, h.screen_best, h.screened = best.chi2, best, evaluated
-        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {best.chi2:.4g}")
+    neutral = neutral_values(h.effect)
+    done = h.screened
+
+    def run(points: list[dict]) -> list[Evaluation]:
+        new = [p for p in points if all(p != e.values for e in done)]
+        if new:  # one batch per hypothesis (its effect spec is part of every run)
+            ws = ev.evaluate(h.spec, new, f"screen {h.name}")
+            done.extend(Evaluation(v, w) for v, w in zip(new, ws, strict=True))
+        return [next(e for e in done if e.values == p) for p in points]
+
+    evaluated = run([{**b, **neutral, **probe} for b in bases for probe in probes])
+    from_h0 = [(p, e) for p, e in zip(probes, evaluated[:len(probes)], strict=True)
+               if e.w is not None]
+    predicted = []
+    for probe, e in sorted(from_h0, key=lambda pe: pe[1].chi2)[:1]:  # the best probe
+        d = e.w - w0
+        A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
+        x, *_ = np.linalg.lstsq(A, -w0, rcond=None)
+        c = float(np.clip(x[-1], 0.0, 2.0))
+        z = h0.coords.code(base) + (x[:-1] if J is not None and J.size else 0.0)
+        values = {**h0.coords.decode(np.clip(z, -1, 1)), **{
+            k: clip_to(h.coords.axes[h.coords.names.index(k)],
+                       neutral[k] + c * (v - neutral[k])) for k, v in probe.items()}}
+        predicted.append({**neutral, **probe, **values})
+    if predicted:
+        run(predicted)
+    best = min([Evaluation({**base, **neutral}, w0), *done], key=lambda e: e.chi2)
+    h.screen_chi2, h.screen_best = best.chi2, best
 
 
 def other_start(h0, h) -> Evaluation | None:
     """The best screened point of ``h`` whose base values are far (0.2 coded) from those of
-    its calibrated point."""
+    its calibrated point and of the point its calibration started from (the same start
+    again would repeat the same path)."""
     base = h0.coords
-    z = base.code(h.fit.values)
+    seen = [base.code(h.fit.values), base.code(h.fit.evaluations[0].values)]
     far = [e for e in h.screened if e.w is not None and
-           np.max(np.abs(base.code(e.values) - z)) > 0.2]
+           all(np.max(np.abs(base.code(e.values) - z)) > 0.2 for z in seen)]
     return min(far, key=lambda e: e.chi2) if far else None
 
 

@@ -103,7 +103,7 @@ CASES = [
 def test_offsets_and_an_effect_name_the_effect_and_its_place(hidden, candidates, study,
                                                              runner, tmp_path):
     meas = measure(study, tmp_path, hidden)
-    res = diagnose(study, meas, runner, candidates=candidates, refine=2)
+    res = diagnose(study, meas, runner, candidates=candidates, refine=1)
     truth = hidden.split(":")[0]
     assert res.verdict == truth, (res.reason, [(r["hypothesis"], round(r["chi2"], 1))
                                                for r in res.rows])
@@ -196,20 +196,25 @@ def test_discrepancy_along_the_friction_velocity_at_a_stick_slip_setting(study, 
     crankshaft sticks and slips within each cycle, and compare the point-to-point scatter of
     chi2 (second differences) with its trend. The calibration's difference step (5 % of the
     coded range, :mod:`sensfw.measure.calibrate`) must be well above the scale where the
-    scatter dominates, and calibrating the velocity from a start off by a factor 2 must
-    come back to within 15 % of the truth."""
+    scatter dominates. Calibrating the velocity from a start off by a factor 2 then measures
+    the model's own scatter at its optimum (:func:`~sensfw.measure.calibrate.roughness`)
+    and widens the entries' errors by it: the truth must lie inside the widened 95 %
+    interval, that interval must exclude the start (the data reject the factor 2), and the
+    widened chi2 must be consistent with the noise (the roughness is not left for an effect
+    to explain)."""
+    from sensfw.measure import discrepancy
     from sensfw.measure.calibrate import Coordinates, Evaluation, calibrate
+    from sensfw.measure.diagnose import widen_for_roughness
     from sensfw.measure.evaluate import Evaluator
 
-    truth = {"slide_stiffness": 7.05e5, "slide_damping": 234.0,
-             "slide_friction_velocity": 0.25}
-    sets = {"slide_v_friction": 0.25, "slide_v_stiction": 0.025}
+    truth = 0.25
+    sets = {"slide_v_friction": truth, "slide_v_stiction": truth / 10}
     sig, _ = synthesize(study, sets=sets, amplitude=0.1, rig=Rig(noise=0.02, seed=2))
     meas = load_measurements(study, [str(write_csv(tmp_path / "m.csv", sig, level=0.1))])
     space = study.calibration_space(["slide_friction_velocity"])
     ev = Evaluator(study, meas, runner, space)
     coords = Coordinates.of(space)
-    z0 = coords.code({"slide_friction_velocity": 0.25})[0]
+    z0 = coords.code({"slide_friction_velocity": truth})[0]
     grid = z0 + np.linspace(-0.1, 0.1, 11)  # 1 % steps of the coded range
     ws = ev.evaluate(None, [coords.decode([z]) for z in grid], "scan")
     chi2 = np.array([float(w @ w) for w in ws])
@@ -219,9 +224,13 @@ def test_discrepancy_along_the_friction_velocity_at_a_stick_slip_setting(study, 
     # against the change of chi2 over the calibration's difference step
     slope = float(np.max(np.abs(np.diff(trend)) / np.diff(grid)))
     assert scatter < 0.25 * slope * 0.05, (scatter, slope, chi2)
-    start = {"slide_friction_velocity": 0.5}
+    start = {"slide_friction_velocity": 2 * truth}
     (w,) = ev.evaluate(None, [start], "start")
     fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibrate"), coords,
                     Evaluation(start, w))
-    assert fit.values["slide_friction_velocity"] == pytest.approx(
-        truth["slide_friction_velocity"], rel=0.15)
+    widen_for_roughness(ev, fit, lambda s: None)
+    (row,) = fit.summary()
+    lo, hi = row["interval"]
+    assert lo <= truth <= hi, (row["value"], row["interval"])
+    assert hi < start["slide_friction_velocity"], row["interval"]
+    assert discrepancy.fits(fit.best.w, 1), fit.chi2
