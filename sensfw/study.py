@@ -36,7 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .errors import SensfwError, StudyError, UnknownPluginError
 from .excitation import Excitation, make_excitation
-from .models.base import Model, SolverSettings
+from .models.base import IMPLICIT_METHODS, Model, SolverSettings
 from .models.stepsize import CALIBRATED_METHODS
 from .params import DesignSpace, Parameter, ParameterSet
 
@@ -114,12 +114,16 @@ class ExcitationSection(_Strict):
 
 
 class SolverSection(_Strict):
-    method: Literal["RK44", "RK67", "ExplicitMidpoint", "ExplicitEuler", "DOPRI5"] = "RK44"
+    # explicit Runge-Kutta methods, or Exudyn's implicit ones (stiff models: the bolted beam)
+    method: Literal["RK44", "RK67", "ExplicitMidpoint", "ExplicitEuler", "DOPRI5",
+                    "GeneralizedAlpha", "TrapezoidalIndex2"] = "RK44"
     step: Quantity = "1e-5 s"
     timeout: Quantity | None = None
     halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
     # smaller steps where the run's linearised eigenvalues need them (models/stepsize.py)
     auto_step: bool = True
+    # numerical dissipation of GeneralizedAlpha (rho_inf; 1 = none)
+    spectral_radius: float = Field(default=0.8, ge=0.0, le=1.0)
 
 
 class ExecutionSection(_Strict):
@@ -424,13 +428,18 @@ class Study:
         if self.excitation is not None and step > 1 / self.excitation.fs:
             problems.append(("solver.step", f"step {step:g} s exceeds the output sample period "
                                             f"{1 / self.excitation.fs:g} s"))
-        if s.auto_step and s.method not in CALIBRATED_METHODS:
+        if s.auto_step and s.method in IMPLICIT_METHODS:
+            problems.append(("solver.auto_step", f"{s.method} is implicit (unconditionally "
+                             "stable): its step is chosen for accuracy, not from the "
+                             "eigenvalues; set auto_step = false and the step"))
+        elif s.auto_step and s.method not in CALIBRATED_METHODS:
             problems.append(("solver.auto_step", f"the automatic step is calibrated for "
                              f"{', '.join(CALIBRATED_METHODS)}, not {s.method} (whose stability "
                              "region is smaller): set auto_step = false and a step that "
                              f"suits {s.method}, or use RK44"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
-                              halvings=s.halvings, auto_step=s.auto_step)
+                              halvings=s.halvings, auto_step=s.auto_step,
+                              spectral_radius=s.spectral_radius)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

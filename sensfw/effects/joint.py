@@ -1,0 +1,155 @@
+"""Effects at a bolted joint (places of kind ``"joint"``): micro-slip friction (an Iwan model
+of Jenkins elements) and cubic stiffness. The clearance and damping effects fit joints too
+(:mod:`.contact`, :mod:`.elements`).
+
+A joint's interface stays closed under the bolts' preload; what changes with amplitude is its
+tangential behaviour. Micro-slip (Segalman 2005; Brake 2018, Ch. 2 and 10): the interface's
+edges slip while its centre sticks, so the joint softens and dissipates more as the load
+grows, until the whole interface slips at the macro-slip force ``mu x preload``. An Iwan
+model (Iwan 1966) represents it as Jenkins elements in parallel: each a spring ``k_i`` in
+series with a Coulomb slider of slip force ``F_i``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..models.places import JointLaw
+from ..params import Parameter
+from ..plugins import effects
+from .base import Effect
+
+MM = 1e-3
+
+
+def _clip(ops, x):
+    return ops.max(ops.min(x, 1.0), -1.0)
+
+
+@effects.register("micro_slip")
+class MicroSlip(Effect):
+    """Micro-slip friction at a joint: a discrete Iwan model of ``elements`` Jenkins elements
+    in parallel with the joint's own law, acting along the joint's tangent between its two
+    points.
+
+    Each Jenkins element is a slider body (``slider_mass``, added at the joint's point on
+    ``body0``) tied to ``body0`` by a spring ``k_i = microslip_stiffness / elements`` and
+    rubbing on ``body1`` with the slip force ``F_i``. The slip displacements ``phi_i = F_i /
+    k_i`` follow Segalman's power-law density ``phi^chi`` on ``[0, phi_max]`` (``chi =
+    exponent``; they are its quantiles), scaled so that the forces add up to
+    ``microslip_force``, the force at which the whole joint slips (friction coefficient x
+    bolt preload): the joint softens from the first level on and more as the load grows,
+    its damping grows with the load.
+
+    The slider is regularised: its friction is ``-F_i clip(v / v_i, -1, 1)``, a viscous
+    element of slope ``F_i / v_i`` in the stick band. With ``v_i = eps omega_ref phi_i``
+    the stuck element is a Maxwell element whose relaxation frequency ``k_i v_i / F_i =
+    eps omega_ref`` lies three decades below ``omega_ref`` (2 pi 100 Hz): it acts as its
+    spring with a loss factor ``eps`` (1e-3) there. The slider's mass (0.1 g) puts its own
+    mode far above the band (a stiff coordinate for the implicit integrator).
+    """
+
+    name = "micro_slip"
+    fits = ("joint",)
+    preferred_places = ("joint",)
+    signatures = ("resonances move down as the level rises", "damping grows with level",
+                  "odd harmonics")
+    signature_classes = frozenset({"softening"})
+    elements: ClassVar[int] = 4
+    exponent: ClassVar[float] = -0.5  # Segalman's chi (-1 < chi <= 0: more weak elements)
+    slider_mass: ClassVar[float] = 1e-4  # kg
+    eps: ClassVar[float] = 1e-3
+    omega_ref: ClassVar[float] = 2 * np.pi * 100.0
+
+    def parameters(self):
+        return [Parameter("microslip_stiffness", "N/mm", 2.0e4, 2.0e3, 2.0e5,
+                          "tangential stiffness of the joint's slipping interface (all "
+                          "Jenkins elements)", "Effect: micro_slip"),
+                Parameter("microslip_force", "N", 200.0, 10.0, 2000.0,
+                          "force at which the whole interface slips (friction coefficient "
+                          "x bolt preload)", "Effect: micro_slip")]
+
+    def jenkins(self, p) -> list[tuple[float, float]]:
+        """``(k_i, F_i)`` (N/m, N) of the elements."""
+        n = self.elements
+        k = p["microslip_stiffness"] / MM / n
+        q = ((np.arange(n) + 0.5) / n) ** (1.0 / (1.0 + self.exponent))
+        phi = q * p["microslip_force"] / (k * q.sum())
+        return [(k, float(k * f)) for f in phi]
+
+    def apply(self, place, hooks, p):
+        tx, ty = place.tangent
+        for i, (k, force) in enumerate(self.jenkins(p)):
+            body = f"slider{i + 1}@{place.name}"
+            v_reg = self.eps * self.omega_ref * force / k
+            hooks.add_body(body, self.slider_mass, follows=(place.body0, place.r0))
+
+            def spring(ops, u, v, k=k):
+                return -k * u[0], -k * u[1]
+
+            def slider(ops, u, v, force=force, v_reg=v_reg):
+                # body1's point relative to the slider, along the tangent
+                ft = -force * _clip(ops, (v[0] * tx + v[1] * ty) * (1.0 / v_reg))
+                return ft * tx, ft * ty
+
+            hooks.add_force(f"jenkins{i + 1}@{place.name}", place.body0, place.r0, body,
+                            (0.0, 0.0), spring)
+            hooks.add_force(f"slider{i + 1}@{place.name}", body, (0.0, 0.0), place.body1,
+                            place.r1, slider)
+
+
+@dataclass(frozen=True)
+class WithCubic:
+    """A joint law with a cubic term ``-k3 s^3`` in its tangential force (hardening)."""
+
+    base: JointLaw
+    k3: float
+
+    def tangential(self, ops, s, s_dot):
+        return self.base.tangential(ops, s, s_dot) - self.k3 * s * s * s
+
+    def normal(self, ops, g, g_dot):
+        return self.base.normal(ops, g, g_dot)
+
+
+@effects.register("cubic_stiffness")
+class CubicStiffness(Effect):
+    """A cubic term in the joint's slip law, ``F = F_base(s) - k3 s^3``: the interface
+    stiffens as it slips further (bolt shank bearing on its hole, asperities flattening):
+    the resonances the joint takes part in move up with level (Duffing hardening)."""
+
+    name = "cubic_stiffness"
+    fits = ("joint",)
+    preferred_places = ("joint",)
+    signatures = ("resonances move up as the level rises", "odd harmonics")
+    signature_classes = frozenset({"hardening"})
+
+    def parameters(self):
+        # slips of 4-20 um at the UNESP-BERT levels: k3 s^2 ~ joint stiffness at 1e9
+        return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 1.0e6, 1.0e10,
+                          "cubic coefficient of the joint's slip law", "Effect: "
+                          "cubic_stiffness")]
+
+    def apply(self, place, hooks, p):
+        k3 = p["cubic_stiffness"] / MM**3
+        hooks.set_contact_law(place.name, WithCubic(hooks.contact_law(place.name), k3))
+
+
+@dataclass(frozen=True)
+class WithDeadZone:
+    """A joint law with a dead zone: no tangential force within ``+-gap`` of slip (a bolt
+    that must cross its hole's clearance before it bears)."""
+
+    base: JointLaw
+    gap: float
+
+    def tangential(self, ops, s, s_dot):
+        engaged = s - ops.max(ops.min(s, self.gap), -self.gap)
+        rate = ops.where(ops.abs(s) > self.gap, s_dot, 0.0)
+        return self.base.tangential(ops, engaged, rate)
+
+    def normal(self, ops, g, g_dot):
+        return self.base.normal(ops, g, g_dot)
