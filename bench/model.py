@@ -22,6 +22,8 @@ from __future__ import annotations
 import argparse
 import time
 
+import numpy as np
+
 from sensfw.excitation import Chirp
 from sensfw.models.base import SolverSettings
 from sensfw.models.shaft_assembly import PARAMETERS, ShaftAssembly
@@ -89,7 +91,8 @@ def ancf_cantilever(excitation, elements: int = 20, step: float = 1 / 8192,
     ti.generalizedAlpha.spectralRadius = 0.8
     ti.newton.useModifiedNewton = True
     ti.newton.relativeTolerance = simulation.NEWTON_TOLERANCE
-    ti.newton.absoluteTolerance = absolute_tolerance or simulation.NEWTON_ABSOLUTE
+    ti.newton.absoluteTolerance = absolute_tolerance or simulation.NEWTON_ABSOLUTE * float(
+        np.max(np.abs(excitation.force())))
     exu.config.printToConsole = False
     t0 = time.perf_counter()
     mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
@@ -127,15 +130,14 @@ def beam(args) -> None:
     sym_short = (run(short, "symbolic") - setup("symbolic")) / d
     py_short = (run(short, "python") - setup("python")) / d
     ancf = ancf_cantilever(short) / d
-    ancf_loose = ancf_cantilever(short, absolute_tolerance=1e-6) / d
+    ancf_loose = ancf_cantilever(short, absolute_tolerance=1e-4) / d
     verdict = "met" if wall < 20.0 else "MISSED"
     print(f"bolted beam: one 16 s record (8 s sweep + 8 s tail, 1024 Hz, GA 1/8192 s) in "
           f"{wall:.2f} s wall   target < 20 s: {verdict}")
     print(f"  time integration per simulated s on a {d:g} s sweep: symbolic {sym_short:.2f} s,"
           f" python user functions {py_short:.2f} s ({py_short / sym_short:.1f}x), "
-          f"20-element ANCF cantilever {ancf:.2f} s ({ancf / sym_short:.0f}x; its residual "
-          f"floor is higher: with Newton's absolute tolerance 1e-6 N instead of 1e-8 N "
-          f"{ancf_loose:.2f} s, {ancf_loose / sym_short:.1f}x)")
+          f"20-element ANCF cantilever {ancf:.2f} s ({ancf / sym_short:.1f}x; with Newton's "
+          f"absolute tolerance 1e-4 N {ancf_loose:.2f} s, {ancf_loose / sym_short:.1f}x)")
 
 
 def main() -> None:

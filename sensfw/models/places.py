@@ -50,7 +50,8 @@ class Place:
     For a contact or a joint, ``body0``/``r0`` and ``body1``/``r1`` are the two bodies and the
     points (body coordinates, m) it connects, ``normal`` the unit direction along which the
     contact pushes ``body1`` away from ``body0`` when closed (global, reference
-    configuration) and ``tangent`` the sliding direction. For a body, ``body1``/``r1`` is the
+    configuration) and ``tangent`` the sliding direction (a joint may list all its
+    interface point pairs in ``points``). For a body, ``body1``/``r1`` is the
     body and its reference point (e.g. where a sensor or the shaker sits), ``normal`` and
     ``tangent`` its transverse and axial axes; ``body0`` is the ground.
     """
@@ -64,6 +65,10 @@ class Place:
     r1: Point = (0.0, 0.0)
     normal: Point = (0.0, 1.0)
     tangent: Point = (1.0, 0.0)
+    #: for a joint whose interface the model represents by several point pairs: every
+    #: ``(r0, r1)`` pair (``r0``/``r1`` is one of them); the model shares the joint's law
+    #: among them, and an effect that adds elements along the interface may do the same
+    points: tuple[tuple[Point, Point], ...] = ()
 
 
 @runtime_checkable

@@ -150,7 +150,8 @@ POINTS = {"nominal": {},
                                                   "shaker_mass", "density")}}
 
 
-@pytest.mark.parametrize("point", list(POINTS))
+@pytest.mark.parametrize("point", [pytest.param(k, marks=[] if k == "nominal" else
+                                                 pytest.mark.slow) for k in POINTS])
 def test_eigenfrequencies_match_the_independent_euler_bernoulli_model(point):
     p = PARAMETERS.complete(POINTS[point])
     ours = BoltedBeam().eigenfrequencies(p, N_MODES)
@@ -159,6 +160,7 @@ def test_eigenfrequencies_match_the_independent_euler_bernoulli_model(point):
     assert 80 < ours[1] < 110  # the measured band holds the second bending mode
 
 
+@pytest.mark.slow
 def test_mesh_and_reduction_convergence():
     """The element size does not matter at 10 mm (cubic Hermite elements); the reduction's
     cutoff is what limits the higher modes, and raising it converges onto the independent

@@ -62,6 +62,10 @@ class BeamAssembly:
     ground: str = "ground"
     added: dict[str, tuple[float, Key]] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # the model's own force elements and laws, before effects (the structure's damping)
+        self.base_links, self.base_laws = len(self.links), dict(self.laws)
+
     # ---- hooks for effects ------------------------------------------------------------------
     def contact_law(self, place: str):
         try:
@@ -214,23 +218,28 @@ class Structure:
             return (self.assembly.added[body][1][1], 0.0)
         return (float(r[0]), float(r[1]))
 
-    def forces(self, z, zd, contact=None) -> np.ndarray:
-        """Generalised forces of all force elements (numpy, SI)."""
+    def forces(self, z, zd, contact=None, base: bool = False) -> np.ndarray:
+        """Generalised forces of all force elements (numpy, SI); ``base``: only the model's
+        own, with the laws they had before effects. ``z``, ``zd`` may hold several states
+        as columns (shape ``(n, m)``): the laws evaluate them at once."""
         ops = numpy_ops()
-        contact = contact or BeamContacts(ops, self.assembly.laws)
-        f = np.zeros(self.n)
-        for ln in self.assembly.links:
+        a = self.assembly
+        contact = contact or BeamContacts(ops, a.base_laws if base else a.laws)
+        z, zd = np.asarray(z, float), np.asarray(zd, float)
+        f = np.zeros(np.broadcast_shapes(z.shape, zd.shape))
+        zero = np.zeros(f.shape[1:])
+        for ln in (a.links[:a.base_links] if base else a.links):
             i0, i1 = self.coordinate(ln.body0, ln.r0), self.coordinate(ln.body1, ln.r1)
-            u0 = (0.0, 0.0) if i0 is None else (z[i0], z[i0 + 1])
-            v0 = (0.0, 0.0) if i0 is None else (zd[i0], zd[i0 + 1])
-            u1 = (0.0, 0.0) if i1 is None else (z[i1], z[i1 + 1])
-            v1 = (0.0, 0.0) if i1 is None else (zd[i1], zd[i1 + 1])
+            u0 = (zero, zero) if i0 is None else (z[i0], z[i0 + 1])
+            v0 = (zero, zero) if i0 is None else (zd[i0], zd[i0 + 1])
+            u1 = (zero, zero) if i1 is None else (z[i1], z[i1 + 1])
+            v1 = (zero, zero) if i1 is None else (zd[i1], zd[i1 + 1])
             fx, fy = ln.law(ops, (u1[0] - u0[0], u1[1] - u0[1]), (v1[0] - v0[0],
                                                                      v1[1] - v0[1]), contact)
             for i, s in ((i1, 1.0), (i0, -1.0)):
                 if i is not None:
-                    f[i] += s * float(fx)
-                    f[i + 1] += s * float(fy)
+                    f[i] += s * fx
+                    f[i + 1] += s * fy
         return f
 
     def residual(self, z, zd=None, load=None) -> np.ndarray:
@@ -239,18 +248,20 @@ class Structure:
         r = self.forces(z, zd) - self.stiffness() @ z
         return r if load is None else r + load
 
-    def linear_matrices(self, z0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def linear_matrices(self, z0: np.ndarray, base: bool = False
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``M``, ``K`` (beams + force elements) and the force elements' damping at ``z0``
-        (central differences)."""
-        n = self.n
-        K, D, zero = self.stiffness(), np.zeros((n, n)), np.zeros(n)
-        contact = BeamContacts(numpy_ops(), self.assembly.laws)
-        for i in range(n):
-            e = np.zeros(n)
-            e[i] = 1e-9
-            K[:, i] -= (self.forces(z0 + e, zero, contact)
-                        - self.forces(z0 - e, zero, contact)) / 2e-9
-            D[:, i] -= (self.forces(z0, e, contact) - self.forces(z0, -e, contact)) / 2e-9
+        (central differences, all coordinates at once); ``base``: the model's own force
+        elements only."""
+        n, h = self.n, 1e-9
+        a = self.assembly
+        contact = BeamContacts(numpy_ops(), a.base_laws if base else a.laws)
+        E = np.eye(n) * h
+        Z = np.asarray(z0, float)[:, None] + np.zeros((n, n))
+        zero = np.zeros((n, n))
+        K = self.stiffness() - (self.forces(Z + E, zero, contact, base)
+                                - self.forces(Z - E, zero, contact, base)) / (2 * h)
+        D = -(self.forces(Z, E, contact, base) - self.forces(Z, -E, contact, base)) / (2 * h)
         return self.masses(), K, D
 
     def displacement_rows(self, body: str, x: float) -> np.ndarray:

@@ -42,10 +42,11 @@ def beams(g: Geometry) -> list[Beam]:
 def places(g: Geometry) -> dict[str, Place]:
     """The joint, the clamp and the two beams."""
     xj = g.joint_x
+    pairs = tuple(((x, 0.0), (x, 0.0)) for x in g.interface_x())
     out = [
         Place("joint", "joint", "bolted half-lap joint, interface slip along the beams "
-              "(beam1 - beam2, at the free-side end of the overlap)", "beam1", (xj, 0.0), "beam2",
-              (xj, 0.0), TRANSVERSE, AXIAL),
+              "(beam1 - beam2, at the free-side end of the overlap)", "beam1", (xj, 0.0),
+              "beam2", (xj, 0.0), TRANSVERSE, AXIAL, pairs),
         Place("clamp", "contact", "clamp jaws at the clamp edge (ground - beam1)", GROUND,
               (0.0, 0.0), "beam1", (0.0, 0.0), TRANSVERSE, AXIAL),
         Place("beam1", "body", "clamped beam, at the shaker's drive point", GROUND,

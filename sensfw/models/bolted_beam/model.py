@@ -22,9 +22,9 @@ steps of ~1 us (16 M steps for a 16 s record); the implicit generalised-alpha me
 band (sweep and its third harmonic) with a period error below 0.1 % (step convergence
 tested).
 
-Damping: every mode of the linear structure (the beams with the joint's and the clamp's laws
-linearised) has the modal damping ratio ``damping_ratio``; the joint's viscous
-``joint_damping`` acts on its slip.
+Damping: every mode of the base linear structure (the beams with the joint's and the
+clamp's own laws linearised) has the modal damping ratio ``damping_ratio``; the joint's
+viscous ``joint_damping`` acts on its slip.
 
 Effects (:mod:`sensfw.effects`) act at the model's places through the hooks of
 :class:`~.assembly.BeamAssembly`; the model applies them without knowing their names.
@@ -114,11 +114,18 @@ class BoltedBeam(Model):
     def state(self, params: Mapping[str, float]) -> tuple[dict, Structure, np.ndarray,
                                                           np.ndarray]:
         """(full parameters, structure, static state, modal damping matrix of the
-        structure's coordinates)."""
+        structure's coordinates).
+
+        The modal damping is that of the *base* structure (the beams with the model's own
+        joint and clamp laws, linearised), whatever the effects: structural damping is a
+        property of the beams. Computed from a structure stiffened or loosened by an effect
+        (e.g. a Jenkins spring seen grounded, since the slider's stick is a damper) it would
+        put the large damping ``2 zeta omega`` of that system's high modes into the
+        measured mode."""
         p = self.parameters().complete(params)
         st = self.structure(p)
         z0 = solve_static(st, model=self.name, params=p)
-        M, K, _ = st.linear_matrices(z0)
+        M, K, _ = st.linear_matrices(z0, base=True)
         ns = st.n_struct
         D = np.zeros_like(M)
         D[:ns, :ns] = modal_damping(M[:ns, :ns], K[:ns, :ns], p["damping_ratio"])
@@ -195,7 +202,8 @@ class BoltedBeam(Model):
         n_out = excitation.n_samples
         try:
             channels = simulation.solve(built, excitation.fs, n_out, choice.substeps,
-                                        solver.method, solver.spectral_radius)
+                                        solver.method, solver.spectral_radius,
+                                        float(np.max(np.abs(excitation.force()))))
         except exu.SolverError as exc:
             raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
         if not channels:

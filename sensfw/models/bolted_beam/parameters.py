@@ -23,8 +23,8 @@ PARAMETERS = ParameterSet([
     _P("youngs_modulus", "GPa", 70.0, 60.0, 80.0, "Young's modulus of the aluminium beams",
        "Beams"),
     _P("density", "kg/m^3", 2700.0, 2600.0, 2800.0, "density of the aluminium beams", "Beams"),
-    _P("damping_ratio", "", 0.004, 0.0005, 0.02, "modal damping ratio of every mode of the "
-       "linear structure (material, clamp, shaker, air)", "Beams"),
+    _P("damping_ratio", "", 0.01, 0.001, 0.03, "modal damping ratio of every mode of the "
+       "linear structure (material, clamp, the shaker's back-EMF, air)", "Beams"),
     _P("joint_stiffness", "N/mm", 1.0e5, 1.0e4, 1.0e6, "tangential (slip) stiffness of the "
        "lap joint's interface, summed over its interface points", "Joint"),
     _P("joint_damping", "N*s/mm", 0.05, 0.0, 1.0, "viscous damping of the joint's "
@@ -51,8 +51,9 @@ class Geometry:
     shaker_x: float = 0.085
     bolt_x: tuple[float, float] = (0.240, 0.260)  # the two bolts (estimate: 10 mm from ends)
     bolt_mass: float = 0.008  # kg per bolt with nut and washers (M6, estimate)
-    #: interface points of the joint's law, equally spaced over the overlap
-    interface_points: int = 5
+    #: interface points of the joint's law, equally spaced over the overlap: with 4, two
+    #: per bolt at +-5 mm (the edge of the pressure cone under a bolt head ~1.5 d)
+    interface_points: int = 4
     joint_normal_stiffness: float = 1.0e9  # N/m over all interface points (closed contact)
     # sensors (m from the clamp edge); Acc1 and the laser at the free end. The sketch is not
     # to scale; it puts Acc3 at ~175 mm, where the nominal model's second mode has the
@@ -84,8 +85,9 @@ class Geometry:
     def joint_x(self) -> float:
         """Position of the joint's place: the interface point at the free-side end of the
         overlap. Bending makes the interface slip in opposite directions at the two ends of
-        the overlap (each half bends about its own centroid) and hardly at its middle (the
-        nominal second mode: slip / tip deflection 5.0e-3 at 266 mm, -4.9e-3 at 234 mm,
-        4e-5 at 250 mm), so an effect that adds a slider or a damper acts where the joint
-        slips."""
+        the overlap (each half bends about its own centroid) and hardly at its middle (with
+        five points, the nominal second mode has slip / tip deflection 5.0e-3 at 266 mm,
+        -4.9e-3 at 234 mm, 4e-5 at 250 mm), so an effect that adds one element acts where
+        the joint slips; the place lists every interface point for effects that act along
+        the whole interface."""
         return self.interface_x()[-1]
