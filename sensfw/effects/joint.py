@@ -41,10 +41,12 @@ class MicroSlip(Effect):
     Each Jenkins element is a slider body (``slider_mass``, added at the point of
     ``body0``) tied to ``body0`` by a spring ``k_i`` and rubbing on ``body1`` with the slip
     force ``F_i``; per point ``elements`` of them with equal springs. Their slip
-    displacements ``phi_i = F_i / k_i`` follow Segalman's power-law density ``phi^chi`` on
-    ``[0, phi_max]`` (``chi = exponent``; they are its quantiles), scaled so that all the
-    forces add up to ``microslip_force``, the force at which the whole interface slips
-    (friction coefficient x bolt preload), and the springs to ``microslip_stiffness``.
+    displacements ``phi_i = F_i / k_i`` follow a power-law density ``phi^chi`` on ``[0,
+    phi_max]`` (Segalman 2005; ``chi = microslip_exponent``, the elements are its
+    quantiles: ``chi < 0`` puts more of them at small slips, ``chi > 0`` near ``phi_max``),
+    scaled so that all the forces add up to ``microslip_force``, the force at which the whole
+    interface slips (friction coefficient x bolt preload), and the springs to
+    ``microslip_stiffness``.
     Where bending makes the interface slip most (the ends of a lap joint's overlap), the
     elements slip first: the joint softens from low levels on and more as the load grows,
     and its damping grows with the load.
@@ -67,8 +69,7 @@ class MicroSlip(Effect):
     signatures = ("resonances move down as the level rises", "damping grows with level",
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
-    elements: ClassVar[int] = 2  # per interface point
-    exponent: ClassVar[float] = -0.5  # Segalman's chi (-1 < chi <= 0: more weak elements)
+    elements: ClassVar[int] = 3  # per interface point
     slider_mass: ClassVar[float] = 1e-5  # kg: 8 of them add 0.08 g to the joint (bolts 16 g)
     eps: ClassVar[float] = 0.03
     omega_ref: ClassVar[float] = 2 * np.pi * 100.0
@@ -82,13 +83,16 @@ class MicroSlip(Effect):
                           "Jenkins elements)", "Effect: micro_slip"),
                 Parameter("microslip_force", "N", 2000.0, 10.0, 20000.0,
                           "force at which the whole interface slips (friction coefficient "
-                          "x bolt preload)", "Effect: micro_slip")]
+                          "x bolt preload)", "Effect: micro_slip"),
+                Parameter("microslip_exponent", "", -0.5, -0.9, 2.0,
+                          "exponent chi of the slip-displacement density phi^chi (Segalman)",
+                          "Effect: micro_slip")]
 
     def jenkins(self, p, points: int = 1) -> list[tuple[float, float]]:
         """``(k_i, F_i)`` (N/m, N) of the elements at one of ``points`` interface points."""
         n = self.elements
         k = p["microslip_stiffness"] / MM / (n * points)
-        q = ((np.arange(n) + 0.5) / n) ** (1.0 / (1.0 + self.exponent))
+        q = ((np.arange(n) + 0.5) / n) ** (1.0 / (1.0 + p["microslip_exponent"]))
         phi = q * p["microslip_force"] / points / (k * q.sum())
         return [(k, float(k * f)) for f in phi]
 

@@ -132,7 +132,7 @@ def test_micro_slip_is_an_iwan_model_whose_elements_add_up_to_its_parameters():
     from sensfw.effects.joint import MicroSlip
 
     eff = MicroSlip()
-    p = {"microslip_stiffness": 1e5, "microslip_force": 400.0}
+    p = {"microslip_stiffness": 1e5, "microslip_force": 400.0, "microslip_exponent": -0.5}
     parts = [kf for _ in range(4) for kf in eff.jenkins(p, 4)]
     assert sum(k for k, _ in parts) == pytest.approx(1e8)  # N/m
     assert sum(f for _, f in parts) == pytest.approx(400.0)

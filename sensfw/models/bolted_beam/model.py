@@ -7,20 +7,24 @@ the joint, on beam2), ``Acc3`` (above it, on beam1), ``Acc4`` (near the clamp), 
 accelerations in m/s^2, and ``Laser``, the transverse velocity of the free end in m/s.
 
 **Why a Craig-Bampton reduction of Euler-Bernoulli frame elements, integrated implicitly.**
-The beams are slender (L/h ~ 40) and move a few micrometres to millimetres: linear
+The beams are slender (L/h ~ 40) and move micrometres to millimetres: linear
 Euler-Bernoulli kinematics are exact enough, and the joint's nonlinearity sits in a few force
-elements. The reduced structure has ``2 x 16`` physical point coordinates and a handful of
-fixed-interface modes (~40 coordinates) and reproduces the full 130-element FE model's
-eigenfrequencies below 1 kHz within 0.01 % (tests). Exudyn's ANCF cable elements
-(``ObjectANCFCable2D``) were the alternative: geometrically nonlinear (not needed here) and
-with the axial stiffness of every element as coordinates; ``bench/model.py`` measures one
-second of a 20-element ANCF cantilever against one second of this model with the same
-integrator and step. Both are *stiff* (the axial and interface coordinates of short
-segments, the stiff normal contacts reach 10^5-10^6 rad/s), so an explicit method would need
-steps of ~1 us (16 M steps for a 16 s record); the implicit generalised-alpha method at
-1/8192 s (8 steps per output sample) damps those modes numerically and resolves the 70-330 Hz
-band (sweep and its third harmonic) with a period error below 0.1 % (step convergence
-tested).
+elements. The half-lap's eccentric halves and the interface slip are exact in frame elements
+written on the interface plane (:mod:`.fe`). The reduced structure has the 14 attachment
+points' 28 physical coordinates and 3 fixed-interface modes (31 coordinates at the nominal
+values); against an independent 5 mm Euler-Bernoulli model of the same geometry its first two
+eigenfrequencies agree within 5e-5 and the 3rd and 4th (313, 515 Hz) within 4.4e-4, the
+reduction's truncation (3e-5 with a 16 kHz cutoff; tests). Exudyn's ANCF cable elements
+(``ObjectANCFCable2D``) were the alternative: geometrically nonlinear (not needed here), no
+eccentric sections (the half-lap would need extra constraints), and slower: ``bench/model.py``
+integrates a plain 20-element ANCF cantilever 3-4x slower per simulated second than this
+model with the same integrator and step. Both are *stiff*: the reduced model's fastest
+eigenvalue is 8e5 rad/s (short segments' axial and interface coordinates, the stiff normal
+contacts), so RK4 would need 1.8 us steps (8.7 M for a 16 s record); the implicit
+generalised-alpha method at 1/8192 s (8 steps per output sample) damps those modes
+numerically and resolves the 70-330 Hz band (sweep and third harmonic) with a period error of
+4e-4 (0.04 Hz at 91 Hz; tests). One 16 s record at 1024 Hz takes ~1.7 s on one core
+(``bench/model.py``).
 
 Damping: every mode of the base linear structure (the beams with the joint's and the
 clamp's own laws linearised) has the modal damping ratio ``damping_ratio``; the joint's
@@ -198,14 +202,27 @@ class BoltedBeam(Model):
         exu.config.printToConsole = False
         t0 = time.perf_counter()
         choice = self.time_step(p, excitation.fs, solver)
-        built = self.build(p, excitation, user_functions=user_functions, step=choice.step)
         n_out = excitation.n_samples
-        try:
-            channels = simulation.solve(built, excitation.fs, n_out, choice.substeps,
-                                        solver.method, solver.spectral_radius,
-                                        float(np.max(np.abs(excitation.force()))))
-        except exu.SolverError as exc:
-            raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
+        scale = float(np.max(np.abs(excitation.force())))
+        # Newton: modified (Jacobian kept while it converges: one iteration per step for the
+        # linear model) unless effects added bodies (light sliders stiffly tied by
+        # regularised friction: a stale Jacobian from the other side of a stick-slip
+        # transition never converged there, even at 1e-8 s steps); a modified-Newton failure
+        # is retried with full Newton
+        full = bool(self.assembly(p).added)
+        while True:
+            built = self.build(p, excitation, user_functions=user_functions,
+                               step=choice.step)
+            try:
+                channels = simulation.solve(built, excitation.fs, n_out, choice.substeps,
+                                            solver.method, solver.spectral_radius, scale,
+                                            full_newton=full)
+                break
+            except exu.SolverError as exc:
+                if full or solver.method not in simulation.IMPLICIT:
+                    raise SimulationError(self.name, f"Exudyn solver error: {exc}",
+                                          p) from None
+                full = True
         if not channels:
             raise SimulationError(self.name, "Exudyn solver did not finish", p)
         for name, x in channels.items():
@@ -220,7 +237,8 @@ class BoltedBeam(Model):
                        f_inst=excitation.f_inst(t),
                        units={"force": "N", **{c: self.units[c] for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
-                             "method": solver.method, **choice.to_meta()},
+                             "method": solver.method,
+                             "newton": "full" if full else "modified", **choice.to_meta()},
                        sweep_end=excitation.sweep_end)
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings

@@ -112,11 +112,13 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
 
 
 def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
-          spectral_radius: float = 0.8, force_scale: float = 1.0) -> dict[str, np.ndarray]:
+          spectral_radius: float = 0.8, force_scale: float = 1.0,
+          full_newton: bool = False) -> dict[str, np.ndarray]:
     """Integrate at the fixed step ``1 / (fs substeps)`` and return every sensor's ``n_out``
     samples at ``fs``; raises ``exudyn.SolverError`` or returns short/non-finite channels
     when the solver fails. ``force_scale`` is the largest excitation force (N), which
-    scales Newton's absolute tolerance. Always resets the system."""
+    scales Newton's absolute tolerance; ``full_newton`` updates the Jacobian at every
+    iteration (see :meth:`~.model.BoltedBeam.simulate`). Always resets the system."""
     import exudyn as exu
 
     mbs, SC = built.mbs, built.SC
@@ -129,10 +131,10 @@ def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
     ss.solution.file.write = False
     ss.solution.sensors.writePeriod = 1.0 / fs
     if method in IMPLICIT:
-        ss.linearSolver.solverType = exu.LinearSolverType.EXUdense
+        ss.linearSolver.solverType = exu.LinearSolverType.EigenDense
         ti.generalizedAlpha.spectralRadius = spectral_radius
         ti.generalizedAlpha.computeInitialAccelerations = True
-        ti.newton.useModifiedNewton = True
+        ti.newton.useModifiedNewton = not full_newton
         # one Newton step solves a linear step to ~1e-7 (the connectors' numerical
         # Jacobian); Exudyn's default 1e-8 forced a second step and a Jacobian update every
         # other step (6x slower for the same signals)
@@ -143,6 +145,12 @@ def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
         # per step: 700 s for an 8 s tail). 1e-6 N per N of excitation force is far below
         # the forces that matter and above that floor.
         ti.newton.absoluteTolerance = NEWTON_ABSOLUTE * max(force_scale, 1e-4)
+        # the connectors' Jacobian is differentiated numerically with a step of
+        # 1e-7 x max(|q|, minimumCoordinateSize); Exudyn's default 0.01 m gives 1e-9 m,
+        # i.e. a velocity step of ~1.6e-5 m/s at this step size, wider than the stick band of
+        # a regularised friction slider (down to ~1e-6 m/s): Newton then failed at stick-slip
+        # transitions. 1e-4 m keeps the step 100 times smaller.
+        ti.newton.numericalDifferentiation.minimumCoordinateSize = 1e-4
         ti.discontinuous.useRecommendedStepSize = False
     else:
         ti.explicit.computeEndOfStepAccelerations = False
