@@ -61,7 +61,7 @@ def test_the_linear_model_driven_by_the_measured_voltage(measured, tmp_path):
     pick = [measured[0], measured[-1]]
     with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
         cmp = compare_measurements(study, pick, runner, Variant.of([], {}))
-    (lo, m_lo, s_lo), (hi, m_hi, s_hi) = cmp.pairs
+    (_, m_lo, s_lo), (_, m_hi, s_hi) = cmp.pairs
     # the model's input channel is the measured voltage (the force is gain x voltage)
     assert np.max(np.abs(s_lo.force)) == pytest.approx(np.max(np.abs(m_lo.force)), rel=0.01)
     f_lo, f_hi = laser_fit(s_lo).fn_hz, laser_fit(s_hi).fn_hz
