@@ -274,7 +274,11 @@ def calibrate_microslip(study: Study, meas, runner, linear: dict) -> tuple[dict,
     # hardly slipped there: -0.3 Hz)
     start = {"joint_stiffness": 1.3e5, "microslip_stiffness": 1e6, "microslip_force": 2000.0,
              "microslip_exponent": 0.0}
-    lo = np.array([scale(n, declared[n].min) for n in MICRO_NAMES])
+    # a log axis cannot hold the neutral 0 of microslip_force: it starts at 1e-3 of the top
+    # of the range (20 N, about the old lower bound of 10 N)
+    lo = np.array([scale(n, declared[n].min if declared[n].min > 0 or
+                         n == "microslip_exponent" else 1e-3 * declared[n].max)
+                   for n in MICRO_NAMES])
     hi = np.array([scale(n, declared[n].max) for n in MICRO_NAMES])
     evals = []
 

@@ -82,7 +82,8 @@ class Clearance(Effect):
         if place.kind == "joint":
             from .joint import WithDeadZone
 
-            hooks.set_contact_law(place.name, WithDeadZone(law, gap))
+            if gap > 0:  # neutral: a dead zone of no width is the joint's own law
+                hooks.set_contact_law(place.name, WithDeadZone(law, gap))
         else:
             hooks.set_contact_law(place.name, WithPlay(law, gap))
 

@@ -25,6 +25,16 @@ from .base import Effect
 MM = 1e-3
 
 
+def _decade_probes(effect: Effect, name: str) -> list[dict[str, float]]:
+    """Probes for an effect whose strength ``name`` spans decades (its axis starts at the
+    neutral 0, so the default quarter/half/full steps would all be strong): the strength at
+    1 %, 10 % and all of its maximum, the other parameters at their nominal values."""
+    params = effect.parameters()
+    nominal = {p.name: p.nominal for p in params}
+    top = next(p.max for p in params if p.name == name)
+    return [{**nominal, name: top * f} for f in (0.01, 0.1, 1.0)]
+
+
 def _saturate(ops, v, v_reg):
     """``v / sqrt(v^2 + v_reg^2)``: a smooth sign (Newton converges through stick-slip
     transitions, which a kink of ``clip(v / v_reg)`` stalled)."""
@@ -73,15 +83,17 @@ class MicroSlip(Effect):
     slider_mass: ClassVar[float] = 1e-5  # kg: 8 of them add 0.08 g to the joint (bolts 16 g)
     eps: ClassVar[float] = 0.03
     omega_ref: ClassVar[float] = 2 * np.pi * 100.0
+    #: sliders that slip at zero force carry none: the joint's own law alone
+    neutral: ClassVar[dict[str, float]] = {"microslip_force": 0.0}
 
     def parameters(self):
         # ranges from the UNESP-BERT beam: the joint's stiffness at 0.05 V calibrates to
         # ~1e6 N/mm; two M6 bolts at 5 Nm (~4 kN preload each) with mu 0.2-0.6 slip at
-        # 1.6-5 kN, and the range leaves room on either side
+        # 1.6-5 kN, and the range leaves room on either side (down to the neutral 0)
         return [Parameter("microslip_stiffness", "N/mm", 5.0e5, 1.0e4, 2.0e6,
                           "tangential stiffness of the joint's slipping interface (all "
                           "Jenkins elements)", "Effect: micro_slip"),
-                Parameter("microslip_force", "N", 2000.0, 10.0, 20000.0,
+                Parameter("microslip_force", "N", 2000.0, 0.0, 20000.0,
                           "force at which the whole interface slips (friction coefficient "
                           "x bolt preload)", "Effect: micro_slip"),
                 Parameter("microslip_exponent", "", -0.5, -0.9, 2.0,
@@ -96,7 +108,14 @@ class MicroSlip(Effect):
         phi = q * p["microslip_force"] / points / (k * q.sum())
         return [(k, float(k * f)) for f in phi]
 
+    def probes(self, comparisons):
+        """The macro-slip force at 200 N, 2 kN and 20 kN (the elements slip at the
+        measured levels at the lower ones and stick at the higher), the rest nominal."""
+        return _decade_probes(self, "microslip_force")
+
     def apply(self, place, hooks, p):
+        if p["microslip_force"] <= 0:  # neutral: sliders that carry no force are absent
+            return
         tx, ty = place.tangent
         pairs = place.points or ((place.r0, place.r1),)
         for j, (r0, r1) in enumerate(pairs):
@@ -143,15 +162,22 @@ class CubicStiffness(Effect):
     preferred_places = ("joint",)
     signatures = ("resonances move up as the level rises", "odd harmonics")
     signature_classes = frozenset({"hardening"})
+    neutral: ClassVar[dict[str, float]] = {"cubic_stiffness": 0.0}
 
     def parameters(self):
         # slips of 4-20 um at the UNESP-BERT levels: k3 s^2 ~ joint stiffness at 1e9
-        return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 1.0e6, 1.0e10,
+        return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 0.0, 1.0e10,
                           "cubic coefficient of the joint's slip law", "Effect: "
                           "cubic_stiffness")]
 
+    def probes(self, comparisons):
+        """The cubic coefficient at 1e8, 1e9 and 1e10 N/mm^3."""
+        return _decade_probes(self, "cubic_stiffness")
+
     def apply(self, place, hooks, p):
         k3 = p["cubic_stiffness"] / MM**3
+        if k3 <= 0:  # neutral: the joint's own law, untouched
+            return
         hooks.set_contact_law(place.name, WithCubic(hooks.contact_law(place.name), k3))
 
 

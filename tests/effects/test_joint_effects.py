@@ -54,6 +54,25 @@ def test_every_effect_attaches_at_every_place_of_the_beam_it_fits():
     assert tried == 4 + 2 + 3 * 2 + 2 + 2
 
 
+def test_every_effect_vanishes_exactly_at_its_neutral_values_on_the_beam():
+    """As on the shaft model (tests/effects/test_effects.py): at its neutral values every
+    effect, at every place of the beam it fits, is the beam without it, bit for bit (a
+    quarter-second sweep through the second mode at 10 N: the joint slips by micrometres, so
+    a dead zone, a cubic term or sliders that were only nearly neutral would show)."""
+    ex = LinearSweep(84.0, 96.0, 0.25, 1024.0, 10.0)
+    base = BoltedBeam().simulate(BoltedBeam().parameters().nominal(), ex, GA)
+    tried = 0
+    for name in effects.names():
+        cls = effects.get(name)
+        for place in fitting_places(BoltedBeam().places(), cls):
+            model = BoltedBeam(effects=[{"name": name, "attach": place}])
+            sig = model.simulate(full(model, **cls.neutral), ex, GA)
+            for ch in base.channels:
+                assert np.array_equal(sig.channels[ch], base.channels[ch]), (name, place, ch)
+            tried += 1
+    assert tried == 4 + 2 + 3 * 2 + 2 + 2  # as in the test above
+
+
 def test_the_joint_place_lists_its_interface_points():
     g = BoltedBeam().geometry
     joint = BoltedBeam().places()["joint"]
