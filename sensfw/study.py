@@ -39,7 +39,7 @@ from pydantic import ValidationError
 
 from .errors import SensfwError, StudyError, UnknownPluginError
 from .excitation import Excitation, make_excitation
-from .models.base import Model, SolverSettings
+from .models.base import IMPLICIT_METHODS, Model, SolverSettings
 from .models.stepsize import CALIBRATED_METHODS
 from .params import DesignSpace, Parameter, ParameterSet
 from .study_schema import (  # noqa: F401  (re-exported: the schema's names)
@@ -305,14 +305,18 @@ class Study:
         if self.excitation is not None and step > 1 / self.excitation.fs:
             problems.append(("solver.step", f"step {step:g} s exceeds the output sample period "
                                             f"{1 / self.excitation.fs:g} s"))
-        if s.auto_step and s.method not in CALIBRATED_METHODS:
+        if s.auto_step and s.method in IMPLICIT_METHODS:
+            problems.append(("solver.auto_step", f"{s.method} is implicit (unconditionally "
+                             "stable): its step is chosen for accuracy, not from the "
+                             "eigenvalues; set auto_step = false and the step"))
+        elif s.auto_step and s.method not in CALIBRATED_METHODS:
             problems.append(("solver.auto_step", f"the automatic step is calibrated for "
                              f"{', '.join(CALIBRATED_METHODS)}, not {s.method} (whose stability "
                              "region is smaller): set auto_step = false and a step that "
                              f"suits {s.method}, or use RK44"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
                               halvings=s.halvings, auto_step=s.auto_step,
-                              tolerance=s.tolerance)
+                              tolerance=s.tolerance, spectral_radius=s.spectral_radius)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

@@ -56,7 +56,9 @@ class ExcitationSection(_Strict):
 
 
 class SolverSection(_Strict):
-    method: Literal["RK44", "RK67", "ExplicitMidpoint", "ExplicitEuler", "DOPRI5"] = "RK44"
+    # explicit Runge-Kutta methods, or Exudyn's implicit ones (stiff models: the bolted beam)
+    method: Literal["RK44", "RK67", "ExplicitMidpoint", "ExplicitEuler", "DOPRI5",
+                    "GeneralizedAlpha", "TrapezoidalIndex2"] = "RK44"
     step: Quantity = "1e-5 s"
     timeout: Quantity | None = None
     halvings: int = Field(default=1, ge=0, le=4)  # retries at half the step after divergence
@@ -64,6 +66,8 @@ class SolverSection(_Strict):
     # adaptive steps with this absolute error tolerance where they are over-damped and stiff
     auto_step: bool = True
     tolerance: float = Field(default=DEFAULT_TOLERANCE, gt=0, lt=1e-3)
+    # numerical dissipation of GeneralizedAlpha (rho_inf; 1 = none)
+    spectral_radius: float = Field(default=0.8, ge=0.0, le=1.0)
 
 
 class ExecutionSection(_Strict):

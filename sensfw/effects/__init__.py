@@ -5,10 +5,12 @@ model, through the hooks the model offers there (:mod:`sensfw.models.places`).
 * :mod:`.contact` — effects on a contact's law: ``clearance``, ``friction``,
   ``contact_hardening``;
 * :mod:`.elements` — effects that add force elements, bodies or mass: ``damping``,
-  ``preload``, ``added_mass``, ``flexible_mode``.
+  ``preload``, ``added_mass``, ``flexible_mode``;
+* :mod:`.joint` — effects at a bolted joint: ``micro_slip`` (Iwan model of Jenkins
+  elements), ``cubic_stiffness`` (``clearance`` and ``damping`` fit joints too).
 """
 
-from . import contact, elements  # noqa: F401  (register the built-ins)
+from . import contact, elements, joint  # noqa: F401  (register the built-ins)
 from .base import SIGNATURE_CLASSES, Effect, make_effect
 
 __all__ = ["SIGNATURE_CLASSES", "Effect", "make_effect"]

@@ -57,11 +57,14 @@ class WithFriction:
 
 @effects.register("clearance")
 class Clearance(Effect):
-    """Radial play at a contact (the shaft model's clutch has none in its bore): the parts
-    rattle once the excitation lifts them off their seat."""
+    """Play at a contact (the shaft model's clutch has none in its bore): the parts rattle
+    once the excitation lifts them off their seat. At a joint, a dead zone of the slip law
+    (:class:`~sensfw.effects.joint.WithDeadZone`): the interface carries no tangential
+    force until it has slipped by the gap (a bolt bearing on its hole after its
+    clearance)."""
 
     name = "clearance"
-    fits = ("contact",)
+    fits = ("contact", "joint")
     preferred_places = ("clutch_drive",)
     signatures = ("harmonics (even and odd) that grow with excitation level",
                   "resonances that move with level: down while the contact opens, up once "
@@ -75,8 +78,14 @@ class Clearance(Effect):
                           "Effect: clearance")]
 
     def apply(self, place, hooks, p):
-        hooks.set_contact_law(place.name, WithPlay(hooks.contact_law(place.name),
-                                                   p["clearance_gap"] * MM))
+        law, gap = hooks.contact_law(place.name), p["clearance_gap"] * MM
+        if place.kind == "joint":
+            from .joint import WithDeadZone
+
+            if gap > 0:  # neutral: a dead zone of no width is the joint's own law
+                hooks.set_contact_law(place.name, WithDeadZone(law, gap))
+        else:
+            hooks.set_contact_law(place.name, WithPlay(law, gap))
 
 
 @effects.register("friction")

@@ -15,11 +15,11 @@ from .base import Effect
 
 @effects.register("damping")
 class Damping(Effect):
-    """Viscous damping across a contact (or from a body to the ground), in both in-plane
-    directions: joint or structural damping the penalty contacts do not give."""
+    """Viscous damping across a contact or a joint (or from a body to the ground), in both
+    in-plane directions: joint or structural damping the penalty contacts do not give."""
 
     name = "damping"
-    fits = ("contact", "body")
+    fits = ("contact", "body", "joint")
     preferred_places = ("bearing_l3",)
     signatures = ("lower and wider peaks", "no new harmonics", "no frequency shift")
     signature_classes = frozenset({"amplitude_independent"})

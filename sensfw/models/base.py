@@ -80,6 +80,10 @@ class Signals:
                    **kw)
 
 
+#: Exudyn's implicit integrators (unconditionally stable; the step is chosen for accuracy)
+IMPLICIT_METHODS = ("GeneralizedAlpha", "TrapezoidalIndex2")
+
+
 @dataclass(frozen=True)
 class SolverSettings:
     """Time integration settings that enter the run hash.
@@ -100,10 +104,15 @@ class SolverSettings:
     halvings: int = 1  # retries with half the step after a divergence (explicit stability)
     auto_step: bool = True
     tolerance: float = DEFAULT_TOLERANCE  # absolute error tolerance of adaptive runs
+    #: numerical dissipation of the implicit generalised-alpha method (rho_inf, 0..1)
+    spectral_radius: float = 0.8
 
     def to_dict(self) -> dict:
-        return {"method": self.method, "step": self.step, "halvings": self.halvings,
-                "auto_step": self.auto_step, "tolerance": self.tolerance}
+        out = {"method": self.method, "step": self.step, "halvings": self.halvings,
+               "auto_step": self.auto_step, "tolerance": self.tolerance}
+        if self.method in IMPLICIT_METHODS:  # explicit runs keep the hashes they had
+            out["spectral_radius"] = self.spectral_radius
+        return out
 
 
 class Model(ABC):

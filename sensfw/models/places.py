@@ -17,8 +17,13 @@ Place kinds used by the shipped models:
 ``"body"``
     a body, with a reference point (``r1`` on ``body1``) and its axes;
 ``"joint"``
-    a bilateral connection between two bodies (e.g. a bolted lap joint), also with a
-    :class:`ContactLaw` whose ``normal`` is the force along ``normal``.
+    a bilateral interface between two bodies that stays closed (a bolted lap joint, with
+    ``body0``/``r0`` and ``body1``/``r1`` the same material point on either side of it), with
+    a :class:`JointLaw`: the force along ``tangent`` from the interface *slip* (displacement,
+    not only its rate: micro-slip, stiffness and dead zones need it) and the force along
+    ``normal`` from the relative normal displacement. The joint's effects (micro-slip
+    friction, cubic stiffness, clearance) wrap or replace it, or add force elements and
+    bodies at its points (a Jenkins slider).
 """
 
 from __future__ import annotations
@@ -45,7 +50,8 @@ class Place:
     For a contact or a joint, ``body0``/``r0`` and ``body1``/``r1`` are the two bodies and the
     points (body coordinates, m) it connects, ``normal`` the unit direction along which the
     contact pushes ``body1`` away from ``body0`` when closed (global, reference
-    configuration) and ``tangent`` the sliding direction. For a body, ``body1``/``r1`` is the
+    configuration) and ``tangent`` the sliding direction (a joint may list all its
+    interface point pairs in ``points``). For a body, ``body1``/``r1`` is the
     body and its reference point (e.g. where a sensor or the shaker sits), ``normal`` and
     ``tangent`` its transverse and axial axes; ``body0`` is the ground.
     """
@@ -59,6 +65,10 @@ class Place:
     r1: Point = (0.0, 0.0)
     normal: Point = (0.0, 1.0)
     tangent: Point = (1.0, 0.0)
+    #: for a joint whose interface the model represents by several point pairs: every
+    #: ``(r0, r1)`` pair (``r0``/``r1`` is one of them); the model shares the joint's law
+    #: among them, and an effect that adds elements along the interface may do the same
+    points: tuple[tuple[Point, Point], ...] = ()
 
 
 @runtime_checkable
@@ -82,6 +92,24 @@ class ContactLaw(Protocol):
     def linearized(self, delta0: float) -> tuple[float, float, float]: ...
 
 
+@runtime_checkable
+class JointLaw(Protocol):
+    """The force law of a joint place (SI units), for the whole joint.
+
+    ``tangential(ops, s, s_dot)`` is the force on ``body1`` along the place's ``tangent``
+    for the slip ``s`` (m) of ``body1`` relative to ``body0`` along it and its rate;
+    ``normal(ops, g, g_dot)`` the force on ``body1`` along ``normal`` for the relative
+    normal displacement ``g`` (positive: ``body1`` moves along ``normal``). A linear joint is
+    ``-k s - c s_dot``. A model whose interface has several points shares the law among them
+    (each point carries its share of the force for its own slip), so the law describes the
+    joint as if all its points slipped together. ``ops`` as for :class:`ContactLaw`.
+    """
+
+    def tangential(self, ops, s: Expr, s_dot: Expr) -> Expr: ...
+
+    def normal(self, ops, g: Expr, g_dot: Expr) -> Expr: ...
+
+
 class Hooks(Protocol):
     """What a model offers an effect at its places while it assembles itself.
 
@@ -90,11 +118,11 @@ class Hooks(Protocol):
 
     ground: str
 
-    def contact_law(self, place: str) -> ContactLaw:
+    def contact_law(self, place: str) -> ContactLaw | JointLaw:
         """The current law of contact (or joint) ``place``."""
         ...
 
-    def set_contact_law(self, place: str, law: ContactLaw) -> None:
+    def set_contact_law(self, place: str, law: ContactLaw | JointLaw) -> None:
         """Replace the law of ``place`` (wrap the current one to modify it)."""
         ...
 

@@ -105,8 +105,9 @@ def simulate_with_halving(model: Model, params: dict, excitation: Excitation,
     A voltage record drives the model through the parameter ``excitation_gain`` (N/V,
     :func:`sensfw.models.drive.apply_gain`); the signals then carry the voltage as their
     input (``units["force"] == "V"``), as the measurement does."""
-    from ..models.drive import apply_gain
+    from ..models.drive import GAIN, apply_gain
 
+    gain = params.get(GAIN)
     driving, params = apply_gain(excitation, params)
     step, tried = solver.step, []
     while True:
@@ -124,7 +125,8 @@ def simulate_with_halving(model: Model, params: dict, excitation: Excitation,
             if driving is not excitation:  # the record is the input, as measured
                 signals.force = excitation.force(signals.t)
                 signals.units["force"] = excitation.unit
-                signals.meta["excitation_gain"] = driving.gain
+                # (a closed-form sweep scaled to N has no gain attribute)
+                signals.meta["excitation_gain"] = float(gain)
             signals.meta.setdefault("step", step)
             signals.meta["step_halvings"] = len(tried)
             if tried:  # the step that diverged last is twice the step used

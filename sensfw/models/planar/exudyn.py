@@ -74,8 +74,8 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
         co = mbs.AddObject(ei.ObjectConnectorCartesianSpringDamper(
             markerNumbers=[m0, m1], stiffness=[0, 0, 0], damping=[0, 0, 0],
             offset=[0, 0, 0], name=ln.name))
-        uf = _link_function(ln, off, ops, contact, user_functions)
-        keep.append(_user_function(mbs, co, uf, "springForceUserFunction", user_functions))
+        uf = link_function(ln, off, ops, contact, user_functions)
+        keep.append(user_function(mbs, co, uf, "springForceUserFunction", user_functions))
     for b in layout.bodies:
         mb = mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=bodies[b]))
         mbs.AddLoad(ei.LoadMassProportional(markerNumber=mb, loadVector=[0, -G, 0]))
@@ -83,7 +83,7 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
         load = mbs.AddLoad(ei.LoadForceVector(markerNumber=marker(body, r),
                                               loadVector=[0, 0, 0]))
 
-        keep.append(_user_function(mbs, load, _load_function(force, ops, user_functions),
+        keep.append(user_function(mbs, load, load_function(force, ops, user_functions),
                                    "loadVectorUserFunction", user_functions))
     handles = {}
     for name, body, pos, comp in sensors:
@@ -111,7 +111,7 @@ def solve(built: Built, fs: float, n_out: int, choice) -> tuple[dict[str, np.nda
         built.SC.Reset()
 
 
-def _link_function(ln, off: list[float], ops, contact, kind: str):
+def link_function(ln, off: list[float], ops, contact, kind: str):
     """The CartesianSpringDamper user function of one link (reference offset removed)."""
 
     def force(mbs, t, itemNumber, u, v, k, d, offset):
@@ -119,22 +119,22 @@ def _link_function(ln, off: list[float], ops, contact, kind: str):
         fx, fy = ln.law(ops, tuple(u[i] - off[i] if off[i] else u[i] for i in (0, 1)),
                         (v[0], v[1]), contact)
         # Exudyn applies the returned force to marker 0 and its negative to marker 1
-        return _vector([-fx, -fy, 0.0], kind)
+        return vector([-fx, -fy, 0.0], kind)
 
     return force
 
 
-def _load_function(force, ops, kind: str):
+def load_function(force, ops, kind: str):
     """The LoadForceVector user function of a time-dependent load."""
 
     def load(mbs, t, loadVector):
         fx, fy = force(ops, t)
-        return _vector([fx, fy, 0.0], kind)
+        return vector([fx, fy, 0.0], kind)
 
     return load
 
 
-def _vector(values: list, kind: str) -> list:
+def vector(values: list, kind: str) -> list:
     """A user function's return vector: floats for Python, ``symbolic.Real`` otherwise."""
     if kind == "python":
         return [float(v) for v in values]
@@ -144,7 +144,7 @@ def _vector(values: list, kind: str) -> list:
     return [v if isinstance(v, real) else real(float(v)) for v in values]
 
 
-def _user_function(mbs, item, function, name: str, kind: str):
+def user_function(mbs, item, function, name: str, kind: str):
     """Attach ``function`` as user function ``name`` of ``item``: recorded into an Exudyn
     symbolic (C++ evaluated) function, or as a plain Python callback. Returns the object that
     must be kept alive as long as ``mbs`` lives."""

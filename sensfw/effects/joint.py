@@ -1,0 +1,198 @@
+"""Effects at a bolted joint (places of kind ``"joint"``): micro-slip friction (an Iwan model
+of Jenkins elements) and cubic stiffness. The clearance and damping effects fit joints too
+(:mod:`.contact`, :mod:`.elements`).
+
+A joint's interface stays closed under the bolts' preload; what changes with amplitude is its
+tangential behaviour. Micro-slip (Segalman 2005; Brake 2018, Ch. 2 and 10): the interface's
+edges slip while its centre sticks, so the joint softens and dissipates more as the load
+grows, until the whole interface slips at the macro-slip force ``mu x preload``. An Iwan
+model (Iwan 1966) represents it as Jenkins elements in parallel: each a spring ``k_i`` in
+series with a Coulomb slider of slip force ``F_i``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..models.places import JointLaw
+from ..params import Parameter
+from ..plugins import effects
+from .base import Effect
+
+MM = 1e-3
+
+
+def _decade_probes(effect: Effect, name: str) -> list[dict[str, float]]:
+    """Probes for an effect whose strength ``name`` spans decades (its axis starts at the
+    neutral 0, so the default quarter/half/full steps would all be strong): the strength at
+    1 %, 10 % and all of its maximum, the other parameters at their nominal values."""
+    params = effect.parameters()
+    nominal = {p.name: p.nominal for p in params}
+    top = next(p.max for p in params if p.name == name)
+    return [{**nominal, name: top * f} for f in (0.01, 0.1, 1.0)]
+
+
+def _saturate(ops, v, v_reg):
+    """``v / sqrt(v^2 + v_reg^2)``: a smooth sign (Newton converges through stick-slip
+    transitions, which a kink of ``clip(v / v_reg)`` stalled)."""
+    return v * ops.pow(v * v + v_reg * v_reg, -0.5)
+
+
+@effects.register("micro_slip")
+class MicroSlip(Effect):
+    """Micro-slip friction at a joint: a discrete Iwan model of Jenkins elements in parallel
+    with the joint's own law, along the joint's tangent, at each of its interface point
+    pairs (``place.points``; its one pair ``r0``/``r1`` otherwise), sharing the parameters
+    equally among them as the joint shares its law.
+
+    Each Jenkins element is a slider body (``slider_mass``, added at the point of
+    ``body0``) tied to ``body0`` by a spring ``k_i`` and rubbing on ``body1`` with the slip
+    force ``F_i``; per point ``elements`` of them with equal springs. Their slip
+    displacements ``phi_i = F_i / k_i`` follow a power-law density ``phi^chi`` on ``[0,
+    phi_max]`` (Segalman 2005; ``chi = microslip_exponent``, the elements are its
+    quantiles: ``chi < 0`` puts more of them at small slips, ``chi > 0`` near ``phi_max``),
+    scaled so that all the forces add up to ``microslip_force``, the force at which the whole
+    interface slips (friction coefficient x bolt preload), and the springs to
+    ``microslip_stiffness``.
+    Where bending makes the interface slip most (the ends of a lap joint's overlap), the
+    elements slip first: the joint softens from low levels on and more as the load grows,
+    and its damping grows with the load.
+
+    The slider is regularised: its friction is ``-F_i v / sqrt(v^2 + v_i^2)``, a viscous
+    element of slope ``F_i / v_i`` in the stick band. With ``v_i = eps omega_ref phi_i``
+    the stuck element is a Maxwell element whose relaxation frequency ``k_i v_i / F_i =
+    eps omega_ref`` lies 1.5 decades below ``omega_ref`` (2 pi 100 Hz): it acts as its
+    spring with a loss factor ``eps`` (0.03) there, a small addition to the damping of a
+    mode in proportion to the elements' share of its strain energy. A smaller ``eps``
+    sticks harder but stalls Newton at the stick-slip transitions (0.5 s of the sweep at 5 N
+    through the second mode: 2.3 s wall at eps = 0.01, 1.6 s at 0.03; the sharper
+    clip(v / v_i) stalled at eps = 0.001). The slider's mass (0.01 g) puts its own mode far
+    above the band.
+    """
+
+    name = "micro_slip"
+    fits = ("joint",)
+    preferred_places = ("joint",)
+    signatures = ("resonances move down as the level rises", "damping grows with level",
+                  "odd harmonics")
+    signature_classes = frozenset({"softening"})
+    elements: ClassVar[int] = 3  # per interface point
+    slider_mass: ClassVar[float] = 1e-5  # kg: 8 of them add 0.08 g to the joint (bolts 16 g)
+    eps: ClassVar[float] = 0.03
+    omega_ref: ClassVar[float] = 2 * np.pi * 100.0
+    #: sliders that slip at zero force carry none: the joint's own law alone
+    neutral: ClassVar[dict[str, float]] = {"microslip_force": 0.0}
+
+    def parameters(self):
+        # ranges from the UNESP-BERT beam: the joint's stiffness at 0.05 V calibrates to
+        # ~1e6 N/mm; two M6 bolts at 5 Nm (~4 kN preload each) with mu 0.2-0.6 slip at
+        # 1.6-5 kN, and the range leaves room on either side (down to the neutral 0)
+        return [Parameter("microslip_stiffness", "N/mm", 5.0e5, 1.0e4, 2.0e6,
+                          "tangential stiffness of the joint's slipping interface (all "
+                          "Jenkins elements)", "Effect: micro_slip"),
+                Parameter("microslip_force", "N", 2000.0, 0.0, 20000.0,
+                          "force at which the whole interface slips (friction coefficient "
+                          "x bolt preload)", "Effect: micro_slip"),
+                Parameter("microslip_exponent", "", -0.5, -0.9, 2.0,
+                          "exponent chi of the slip-displacement density phi^chi (Segalman)",
+                          "Effect: micro_slip")]
+
+    def jenkins(self, p, points: int = 1) -> list[tuple[float, float]]:
+        """``(k_i, F_i)`` (N/m, N) of the elements at one of ``points`` interface points."""
+        n = self.elements
+        k = p["microslip_stiffness"] / MM / (n * points)
+        q = ((np.arange(n) + 0.5) / n) ** (1.0 / (1.0 + p["microslip_exponent"]))
+        phi = q * p["microslip_force"] / points / (k * q.sum())
+        return [(k, float(k * f)) for f in phi]
+
+    def probes(self, comparisons):
+        """The macro-slip force at 200 N, 2 kN and 20 kN (the elements slip at the
+        measured levels at the lower ones and stick at the higher), the rest nominal."""
+        return _decade_probes(self, "microslip_force")
+
+    def apply(self, place, hooks, p):
+        if p["microslip_force"] <= 0:  # neutral: sliders that carry no force are absent
+            return
+        tx, ty = place.tangent
+        pairs = place.points or ((place.r0, place.r1),)
+        for j, (r0, r1) in enumerate(pairs):
+            for i, (k, force) in enumerate(self.jenkins(p, len(pairs))):
+                tag = f"{j + 1}.{i + 1}@{place.name}"
+                body = f"slider{tag}"
+                v_reg = self.eps * self.omega_ref * force / k
+                hooks.add_body(body, self.slider_mass, follows=(place.body0, r0))
+
+                def spring(ops, u, v, k=k):
+                    return -k * u[0], -k * u[1]
+
+                def slider(ops, u, v, force=force, v_reg=v_reg):
+                    # body1's point relative to the slider, along the tangent
+                    ft = -force * _saturate(ops, v[0] * tx + v[1] * ty, v_reg)
+                    return ft * tx, ft * ty
+
+                hooks.add_force(f"jenkins{tag}", place.body0, r0, body, (0.0, 0.0), spring)
+                hooks.add_force(f"slip{tag}", body, (0.0, 0.0), place.body1, r1, slider)
+
+
+@dataclass(frozen=True)
+class WithCubic:
+    """A joint law with a cubic term ``-k3 s^3`` in its tangential force (hardening)."""
+
+    base: JointLaw
+    k3: float
+
+    def tangential(self, ops, s, s_dot):
+        return self.base.tangential(ops, s, s_dot) - self.k3 * s * s * s
+
+    def normal(self, ops, g, g_dot):
+        return self.base.normal(ops, g, g_dot)
+
+
+@effects.register("cubic_stiffness")
+class CubicStiffness(Effect):
+    """A cubic term in the joint's slip law, ``F = F_base(s) - k3 s^3``: the interface
+    stiffens as it slips further (bolt shank bearing on its hole, asperities flattening):
+    the resonances the joint takes part in move up with level (Duffing hardening)."""
+
+    name = "cubic_stiffness"
+    fits = ("joint",)
+    preferred_places = ("joint",)
+    signatures = ("resonances move up as the level rises", "odd harmonics")
+    signature_classes = frozenset({"hardening"})
+    neutral: ClassVar[dict[str, float]] = {"cubic_stiffness": 0.0}
+
+    def parameters(self):
+        # slips of 4-20 um at the UNESP-BERT levels: k3 s^2 ~ joint stiffness at 1e9
+        return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 0.0, 1.0e10,
+                          "cubic coefficient of the joint's slip law", "Effect: "
+                          "cubic_stiffness")]
+
+    def probes(self, comparisons):
+        """The cubic coefficient at 1e8, 1e9 and 1e10 N/mm^3."""
+        return _decade_probes(self, "cubic_stiffness")
+
+    def apply(self, place, hooks, p):
+        k3 = p["cubic_stiffness"] / MM**3
+        if k3 <= 0:  # neutral: the joint's own law, untouched
+            return
+        hooks.set_contact_law(place.name, WithCubic(hooks.contact_law(place.name), k3))
+
+
+@dataclass(frozen=True)
+class WithDeadZone:
+    """A joint law with a dead zone: no tangential force within ``+-gap`` of slip (a bolt
+    that must cross its hole's clearance before it bears)."""
+
+    base: JointLaw
+    gap: float
+
+    def tangential(self, ops, s, s_dot):
+        engaged = s - ops.max(ops.min(s, self.gap), -self.gap)
+        rate = ops.where(ops.abs(s) > self.gap, s_dot, 0.0)
+        return self.base.tangential(ops, engaged, rate)
+
+    def normal(self, ops, g, g_dot):
+        return self.base.normal(ops, g, g_dot)

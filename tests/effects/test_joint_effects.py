@@ -1,0 +1,197 @@
+"""Effects on the bolted beam (issue 14, item 3): every effect that fits one of its places
+acts there through the hooks; the joint effects have the physics they claim (micro-slip
+softens and damps with level, cubic stiffness hardens, clearance is a dead zone); the
+generic ones (damping, added mass) change the matrices by what they add."""
+
+import numpy as np
+import pytest
+import scipy.linalg as sl
+
+from sensfw.excitation import LinearSweep
+from sensfw.models.base import SolverSettings
+from sensfw.models.bolted_beam import BoltedBeam
+from sensfw.models.bolted_beam.assembly import solve_static
+from sensfw.models.contact import numpy_ops
+from sensfw.models.joint import LinearJoint
+from sensfw.models.places import fitting_places
+from sensfw.plugins import effects
+from sensfw.signal import frf
+
+OPS = numpy_ops()
+GA = SolverSettings(method="GeneralizedAlpha", step=1 / 8192, auto_step=False)
+
+
+def full(model, **values):
+    return model.parameters().complete(values)
+
+
+def own(p):
+    """The base model's parameters of ``p``."""
+    return {k: p[k] for k in BoltedBeam().parameters()}
+
+
+def second_mode(model, p):
+    """The second bending mode (a joint without slip stiffness adds a sliding mode at 0)."""
+    f = model.eigenfrequencies(p, 3)
+    return f[f > 1.0][1]
+
+
+def test_every_effect_attaches_at_every_place_of_the_beam_it_fits():
+    places = BoltedBeam().places()
+    assert {pl.kind for pl in places.values()} == {"joint", "contact", "body"}
+    tried = 0
+    for name in effects.names():
+        for place in fitting_places(places, effects.get(name)):
+            model = BoltedBeam(effects=[{"name": name, "attach": place}])
+            p = full(model)
+            _, st, z0, _ = model.state(p)
+            # a static state: the force elements balance the beams (N)
+            assert np.max(np.abs(st.residual(z0))) < 1e-6, (name, place)
+            tried += 1
+    # damping at 4 places; clearance at the joint and the clamp; added mass, preload and
+    # flexible mode at the 2 beams; micro-slip and cubic stiffness at the joint; friction and
+    # contact hardening at the clamp
+    assert tried == 4 + 2 + 3 * 2 + 2 + 2
+
+
+def test_every_effect_vanishes_exactly_at_its_neutral_values_on_the_beam():
+    """As on the shaft model (tests/effects/test_effects.py): at its neutral values every
+    effect, at every place of the beam it fits, is the beam without it, bit for bit (a
+    quarter-second sweep through the second mode at 10 N: the joint slips by micrometres, so
+    a dead zone, a cubic term or sliders that were only nearly neutral would show)."""
+    ex = LinearSweep(84.0, 96.0, 0.25, 1024.0, 10.0)
+    base = BoltedBeam().simulate(BoltedBeam().parameters().nominal(), ex, GA)
+    tried = 0
+    for name in effects.names():
+        cls = effects.get(name)
+        for place in fitting_places(BoltedBeam().places(), cls):
+            model = BoltedBeam(effects=[{"name": name, "attach": place}])
+            sig = model.simulate(full(model, **cls.neutral), ex, GA)
+            for ch in base.channels:
+                assert np.array_equal(sig.channels[ch], base.channels[ch]), (name, place, ch)
+            tried += 1
+    assert tried == 4 + 2 + 3 * 2 + 2 + 2  # as in the test above
+
+
+def test_the_joint_place_lists_its_interface_points():
+    g = BoltedBeam().geometry
+    joint = BoltedBeam().places()["joint"]
+    assert [r0[0] for r0, _ in joint.points] == pytest.approx(list(g.interface_x()))
+    assert joint.r0 == joint.points[-1][0]  # the free-side end, where bending slips most
+
+
+def test_added_mass_adds_exactly_its_mass_at_the_point():
+    base = BoltedBeam()
+    mass = BoltedBeam(effects=[{"name": "added_mass", "attach": "beam2"}])
+    p = full(mass, added_mass=0.01)
+    M0, _, _ = base.linear_matrices(own(p))
+    M1, _, _ = mass.linear_matrices(p)
+    _, st, _, _ = mass.state(p)
+    i = st.coordinate("beam2", (base.geometry.free_end, 0.0))
+    dM = M1 - M0
+    assert dM[i, i] == pytest.approx(0.01, rel=1e-9) and dM[i + 1, i + 1] == pytest.approx(
+        0.01, rel=1e-9)
+    dM[i, i] = dM[i + 1, i + 1] = 0.0
+    assert np.max(np.abs(dM)) < 1e-12
+    # 10 g at the free end, where the second mode moves most: the mode drops (Rayleigh)
+    assert second_mode(mass, p) < second_mode(base, own(p)) - 1.0
+
+
+def test_damping_at_the_joint_adds_a_dashpot_between_its_two_points():
+    base = BoltedBeam()
+    damp = BoltedBeam(effects=[{"name": "damping", "attach": "joint"}])
+    p = full(damp, extra_damping=0.2)
+    _, _, D0 = base.linear_matrices(own(p))
+    _, _, D1 = damp.linear_matrices(p)
+    _, st, _, _ = damp.state(p)
+    x = base.geometry.joint_x
+    i, j = st.coordinate("beam1", (x, 0.0)), st.coordinate("beam2", (x, 0.0))
+    G = np.zeros((2, st.n))
+    G[[0, 1], [j, j + 1]] = 1.0
+    G[[0, 1], [i, i + 1]] = -1.0
+    np.testing.assert_allclose(D1 - D0, 200.0 * G.T @ G, atol=1e-3)
+
+
+def test_cubic_stiffness_adds_a_cubic_term_to_the_joint_law_only():
+    base = BoltedBeam().assembly(BoltedBeam().parameters().nominal())
+    model = BoltedBeam(effects=["cubic_stiffness"])
+    p = full(model, cubic_stiffness=1e9)
+    asm = model.assembly(p)
+    assert asm.laws["clamp"] == base.laws["clamp"]
+    s = 1e-5  # m
+    k3 = 1e9 / 1e-9  # N/mm^3 -> N/m^3
+    got = asm.laws["joint"].tangential(OPS, s, 0.0)
+    assert got == pytest.approx(base.laws["joint"].tangential(OPS, s, 0.0) - k3 * s**3)
+    # no effect on the linearisation at rest
+    assert second_mode(model, p) == pytest.approx(second_mode(BoltedBeam(), own(p)), rel=1e-9)
+
+
+def test_clearance_at_the_joint_is_a_dead_zone_of_its_slip_law():
+    model = BoltedBeam(effects=[{"name": "clearance", "attach": "joint"}])
+    p = full(model, clearance_gap=5e-3)  # 5 um
+    law = model.assembly(p).laws["joint"]
+    k = p["joint_stiffness"] * 1e3
+    assert law.tangential(OPS, 4e-6, 1.0) == 0.0
+    assert law.tangential(OPS, 8e-6, 0.0) == pytest.approx(-k * 3e-6)
+    assert law.tangential(OPS, -8e-6, 0.0) == pytest.approx(k * 3e-6)
+    # at rest the joint carries no slip stiffness: the second mode is that of the beams
+    # with a released interface (the same assembly with a zero tangential law)
+    released = BoltedBeam()
+    asm = released.assembly(own(p))
+    asm.set_contact_law("joint", LinearJoint(0.0, 0.0, asm.laws["joint"].k_n))
+    st = released.structure(own(p), asm)
+    M, K, _ = st.linear_matrices(solve_static(st))
+    w2 = sl.eigh(K, M, eigvals_only=True)
+    free = np.sqrt(w2[w2 > (2 * np.pi) ** 2]) / (2 * np.pi)  # without the sliding mode
+    assert second_mode(model, p) == pytest.approx(free[1], rel=1e-6)
+    assert second_mode(model, p) < second_mode(BoltedBeam(), own(p)) - 1.0
+
+
+def test_micro_slip_is_an_iwan_model_whose_elements_add_up_to_its_parameters():
+    from sensfw.effects.joint import MicroSlip
+
+    eff = MicroSlip()
+    p = {"microslip_stiffness": 1e5, "microslip_force": 400.0, "microslip_exponent": -0.5}
+    parts = [kf for _ in range(4) for kf in eff.jenkins(p, 4)]
+    assert sum(k for k, _ in parts) == pytest.approx(1e8)  # N/m
+    assert sum(f for _, f in parts) == pytest.approx(400.0)
+    slips = [f / k for k, f in eff.jenkins(p, 4)]
+    assert slips == sorted(slips) and slips[0] > 0
+    model = BoltedBeam(effects=["micro_slip"])
+    asm = model.assembly(full(model))
+    assert len(asm.added) == 4 * eff.elements  # a slider per element and interface point
+
+
+def resonance(model, p, amplitude):
+    """Peak frequency (parabolic interpolation on the 1/4 Hz grid) and peak magnitude of
+    the laser FRF through the second mode."""
+    sig = model.simulate(p, LinearSweep(84.0, 96.0, 2.0, 1024.0, amplitude, tail=2.0), GA)
+    f, H = frf(sig.force, sig.channels["Laser"], sig.fs, estimator="H1")
+    sel = (f > 85) & (f < 95)
+    f, m = f[sel], np.abs(H[sel])
+    i = int(np.argmax(m))
+    a, b, c = np.log(m[i - 1: i + 2])
+    shift = 0.5 * (a - c) / (a - 2 * b + c)
+    return f[i] + shift * (f[1] - f[0]), m[i]
+
+
+@pytest.mark.slow
+def test_micro_slip_softens_and_damps_the_joint_as_the_level_rises():
+    model = BoltedBeam(effects=["micro_slip"])
+    p = full(model, joint_stiffness=2e4, microslip_stiffness=1e5, microslip_force=500.0)
+    low, high = resonance(model, p, 0.1), resonance(model, p, 10.0)
+    # at 0.1 N every element sticks: the linear model with the Iwan springs added to the
+    # joint (within the 1/4 Hz grid's interpolation error)
+    stuck = BoltedBeam().eigenfrequencies({**own(p), "joint_stiffness": 2e4 + 1e5}, 2)[1]
+    assert abs(low[0] - stuck) < 0.15, (low, stuck)
+    assert high[0] < low[0] - 0.5, (low, high)  # softening
+    assert high[1] < 0.7 * low[1], (low, high)  # more damping: a lower peak per N
+
+
+@pytest.mark.slow
+def test_cubic_stiffness_hardens_the_joint_as_the_level_rises():
+    model = BoltedBeam(effects=["cubic_stiffness"])
+    p = full(model, joint_stiffness=2e4, cubic_stiffness=1e9)
+    low, high = resonance(model, p, 0.1), resonance(model, p, 10.0)
+    assert abs(low[0] - second_mode(model, p)) < 0.15, low
+    assert high[0] > low[0] + 0.5, (low, high)
