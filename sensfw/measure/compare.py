@@ -386,18 +386,58 @@ class LevelComparison:
                 "input_unit": self.unit, "notes": self.notes}
 
 
+@dataclass
+class _Side:
+    """What :func:`compare_level` reads off one record (model or measurement)."""
+
+    f: np.ndarray
+    db: np.ndarray
+    bands_db: np.ndarray
+    noise: np.ndarray
+    peaks: list[dict]
+    harmonics: dict[int, float]
+
+
+def _side(sig: Signals, channel: str, band: tuple[float, float], edges, detail: bool
+          ) -> _Side:
+    f, db, H = frf_db(sig, channel, band, complex_frf=True)
+    return _Side(f, db, band_frf_db(sig, channel, edges), band_noise(sig, channel, edges),
+                 fit_resonances(f, H, resonances(f, db)) if detail else [],
+                 harmonics(sig, channel))
+
+
+#: the measured side of recent comparisons (a calibration compares hundreds of model runs
+#: with the same few records): (id, channel, band) -> (record, side, harmonic floor)
+_MEASURED: dict[tuple, tuple] = {}
+
+
+def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges):
+    key = (id(sig), channel, tuple(band))
+    hit = _MEASURED.get(key)
+    if hit is None or hit[0] is not sig:
+        if len(_MEASURED) > 64:
+            _MEASURED.clear()
+        hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True),
+                                harmonic_floor(sig, channel))
+    return hit[1], hit[2]
+
+
 def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[float, float],
-                  level: float, file: str = "") -> LevelComparison:
-    f, dbm, Hm = frf_db(model, channel, band, complex_frf=True)
-    f2, dbx, Hx = frf_db(measured, channel, band, complex_frf=True)
-    if len(f) != len(f2) or not np.allclose(f, f2):
+                  level: float, file: str = "", detail: bool = True) -> LevelComparison:
+    """The model's record against the measured one on ``channel`` (module docstring).
+    ``detail=False`` (a calibration's many evaluations) leaves out the model's resonance
+    fits, which no residual uses: the comparison's ``resonances`` are then empty."""
+    edges = analysis_bands(*band)
+    mx, floor = _measured_side(measured, channel, band, edges)
+    mm = _side(model, channel, band, edges, detail)
+    f, dbm, dbx = mm.f, mm.db, mx.db
+    if len(f) != len(mx.f) or not np.allclose(f, mx.f):
         raise ValueError("model and measurement have different frequency axes; align first")
     bands = []
-    edges = analysis_bands(*band)
-    bm, bx = band_frf_db(model, channel, edges), band_frf_db(measured, channel, edges)
+    bm, bx = mm.bands_db, mx.bands_db
     # the measurement's scatter minus what the model's own record shows (nonlinear
     # distortion and leakage, shared by both): its random noise (floored at a quarter)
-    e_meas, e_model = band_noise(measured, channel, edges), band_noise(model, channel, edges)
+    e_meas, e_model = mx.noise, mm.noise
     noise = np.sqrt(np.maximum(e_meas**2 - e_model**2, (0.25 * e_meas) ** 2))
     to_db = 20 / np.log(10) / np.sqrt(2)  # standard error in dB: ln|1 + e z| ~ Re(e z)
     for (lo, c, hi), a, b, e, et in zip(edges, bm, bx, noise, e_meas, strict=True):
@@ -410,11 +450,9 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
                       "mean_db": float(a - b), "rms_db": float(np.sqrt(np.mean(d**2))),
                       "noise_db": float(to_db * e) if np.isfinite(e) else None,
                       "scatter_db": float(to_db * et) if np.isfinite(et) else None})
-    pm = fit_resonances(f, Hm, resonances(f, dbm))
-    px = fit_resonances(f, Hx, resonances(f, dbx))
-    res = match_resonances(pm, px)
-    hm, hx = harmonics(model, channel), harmonics(measured, channel)
-    floor = harmonic_floor(measured, channel)
+    pm, px = mm.peaks, mx.peaks
+    res = match_resonances(pm, px) if detail else []
+    hm, hx = mm.harmonics, mx.harmonics
     rows = []
     for k in sorted(set(hm) & set(hx)):
         rows.append({"order": k, "model": hm[k], "measured": hx[k],

@@ -120,7 +120,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     """Diagnose the missing physics (module docstring). ``candidates`` are effect names
     (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it fits);
     ``budget`` caps the simulations of the whole diagnosis: H0's calibration takes at most
-    a fifth, the screen about ten per screened candidate (two each for the first look when
+    a third, the screen about ten per screened candidate (two each for the first look when
     there are many, :func:`~sensfw.measure.screening.screen`), the joint calibrations share
     what is left (each gets at least a few Jacobians); the held-out predictions, one per
     level and calibrated hypothesis, come on top."""
@@ -138,7 +138,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     log(f"H0: calibrating {', '.join(names)} ({source})")
     h0 = Hypothesis(None, "", base_coords)
     h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), base_coords,
-                       start, budget=budget // 5, log=log)
+                       start, budget=budget // 3, log=log)
     scatter = widen_for_roughness(ev, h0.fit, log)
     (h0_all,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
     h0_cmp = ev.output_comparisons(h0_all)

@@ -60,10 +60,11 @@ class Evaluator:
         return Variant.of([effect] if effect else [], params)
 
     def comparisons(self, variants: Sequence[Variant], label: str,
-                    levels: Sequence[int] | None = None
+                    levels: Sequence[int] | None = None, detail: bool = True
                     ) -> list[list[LevelComparison] | None]:
         """Per variant, its comparisons for every (level, channel), levels outer (or only
-        the ``levels``, indices of the measurements); ``None`` where a run failed."""
+        the ``levels``, indices of the measurements); ``None`` where a run failed.
+        ``detail=False``: without the model's resonance fits (residuals only)."""
         idx = list(range(len(self.meas))) if levels is None else list(levels)
         meas = [self.meas[i] for i in idx]
         sims = simulate(self.study, self.runner, variants, meas, label)
@@ -76,8 +77,8 @@ class Evaluator:
                 if sig is None:
                     comps = None
                     break
-                comps += [compare_level(m.signals, sig, ch, self.band, m.level, m.file)
-                          for ch in self.channels]
+                comps += [compare_level(m.signals, sig, ch, self.band, m.level, m.file,
+                                        detail=detail) for ch in self.channels]
             out.append(comps)
         if self.entries is None and levels is None:
             first = next((c for c in out if c is not None), None)
@@ -117,7 +118,8 @@ class Evaluator:
                  label: str, levels: Sequence[int] | None = None
                  ) -> list[np.ndarray | None]:
         """Weighted residual vectors of the model with ``effect`` at ``points``."""
-        comps = self.comparisons([self.variant(effect, p) for p in points], label, levels)
+        comps = self.comparisons([self.variant(effect, p) for p in points], label, levels,
+                                 detail=False)
         return [self.weighted(c, levels) for c in comps]
 
     def rms_db(self, comps) -> float | None:

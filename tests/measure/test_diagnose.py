@@ -138,7 +138,7 @@ def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_pat
     study_file = tmp_path / "s.toml"
     study_file.write_text(tomlkit.dumps(short_quick()))
     proc = cli("diagnose", study_file, *files, "--out", tmp_path / "d", "--no-progress",
-               "--candidates", "flexible_mode@driveshaft,added_mass@driveshaft",
+               "--candidates", "flexible_mode@driveshaft",
                timeout=1800)
     assert proc.returncode == 0, proc.stderr
     diag = json.loads((tmp_path / "d" / "diagnose.json").read_text())
