@@ -84,21 +84,23 @@ class RichProgress:
 
 
 def _runner(study, out_dir: Path, workers, backend, scheduler, retry_failed=False,
-            progress=True):
+            progress=True, read_also=()):
     from ..runs import Runner, RunStore
 
     ex = study.spec.execution
-    return Runner(store=RunStore(out_dir / "runs"),
+    return Runner(store=RunStore(out_dir / "runs", read_also=read_also),
                   backend=backend or ("dask" if scheduler else ex.backend),
                   workers=workers or ex.workers, scheduler=scheduler or ex.scheduler,
                   progress=RichProgress(progress), retry_failed=retry_failed)
 
 
 @contextlib.contextmanager
-def _running(study, out_dir: Path, workers, backend, scheduler, progress):
-    """A Runner on ``out_dir/runs``; its progress bar and workers are closed on exit."""
+def _running(study, out_dir: Path, workers, backend, scheduler, progress, read_also=()):
+    """A Runner on ``out_dir/runs`` (reading also the run stores ``read_also``); its
+    progress bar and workers are closed on exit."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    runner = _runner(study, out_dir, workers, backend, scheduler, progress=progress)
+    runner = _runner(study, out_dir, workers, backend, scheduler, progress=progress,
+                     read_also=read_also)
     try:
         yield runner
     finally:

@@ -197,11 +197,13 @@ def diagnose(
     out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
 
 
-def _diagnosed_values(path: Path, name: str, attach: str) -> tuple[dict, str]:
+def _diagnosed_values(path: Path, name: str, attach: str) -> tuple[dict, str, dict | None]:
     """The calibrated values (base variables and effect parameters) and the place of effect
-    ``name`` in a diagnose.json."""
+    ``name`` in a diagnose.json, and the base values of its "parameters only" hypothesis."""
     try:
-        ranking = json.loads(path.read_text()).get("ranking", [])
+        data = json.loads(path.read_text())
+        ranking = data.get("ranking", [])
+        h0 = (data.get("parameters_only") or {}).get("params")
         rows = [r for r in ranking
                 if r.get("effect") == name and (not attach or r.get("place") == attach)]
     except (OSError, ValueError, AttributeError) as err:
@@ -210,7 +212,7 @@ def _diagnosed_values(path: Path, name: str, attach: str) -> tuple[dict, str]:
         raise SensfwError(f"{path}: no ranking entry for effect {name!r}")
     if not isinstance(rows[0].get("params"), dict) or not rows[0].get("place"):
         raise SensfwError(f"{path}: the entry for {name!r} lacks 'params' or 'place'")
-    return rows[0]["params"], rows[0]["place"]
+    return rows[0]["params"], rows[0]["place"], h0 if isinstance(h0, dict) else None
 
 
 @app.command()
@@ -239,12 +241,15 @@ def augment(
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
     name, _, attach = effect.partition("@")
-    start = None
+    start = base_start = None
+    read_also = []
     if start_from is not None:
-        start, attach = _diagnosed_values(start_from, name, attach)
-    with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
+        start, attach, base_start = _diagnosed_values(start_from, name, attach)
+        read_also = [start_from.parent / "runs"]  # the diagnosis's runs are reused
+    with _running(study, out_dir, workers, backend, scheduler, progress,
+                  read_also=read_also) as runner:
         result = augment_module.augment(study, meas, runner, name, attach or None,
-                                        start=start,
+                                        start=start, base_start=base_start,
                                         log=lambda s: console.print(f"[cyan]{s}"))
     declared = {p.name: p for p in effects.get(name)().parameters()}
     calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}

@@ -27,10 +27,13 @@ from .synthetic import model_with_effects
 
 def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, effect: str,
             attach: str | None = None, start: Mapping[str, float] | None = None,
-            budget: int = 200, log: Log = lambda s: None) -> dict:
+            base_start: Mapping[str, float] | None = None, budget: int = 200,
+            log: Log = lambda s: None) -> dict:
     """Calibrate ``effect`` at ``attach`` (default: its preferred place) jointly with the
     study's calibration variables. ``start`` (e.g. the values :func:`diagnose` found: base
-    variables and effect parameters) replaces the screening of the effect's probes."""
+    variables and effect parameters) replaces the screening of the effect's probes;
+    ``base_start`` (e.g. diagnose's "parameters only" values) is where the base variables'
+    own recalibration starts when it is better than their nominal values."""
     eff = effect_registry.get(effect)(attach=attach)
     model_with_effects(study, [eff])  # resolves (and checks) where it attaches
     names, source = calibration_variables(study, runner, log)
@@ -43,9 +46,15 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         raise SensfwError("the study's model failed at the measured level(s)")
     log(f"recalibrating the base variables {', '.join(names)} ({source})")
     h0 = Hypothesis(None, "", base)
-    h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "base calibration"), base,
-                       Evaluation(nominal, ev.weighted(nominal_cmp)), budget=budget // 3,
-                       log=log)
+    first = Evaluation(nominal, ev.weighted(nominal_cmp))
+    if base_start is not None:
+        given = {k: float(base_start[k]) for k in names if k in base_start}
+        if given:
+            point = {**nominal, **given}
+            (w,) = ev.evaluate(None, [point], "base start")
+            first = min(first, Evaluation(point, w), key=lambda e: e.chi2)
+    h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "base calibration"), base, first,
+                       budget=budget // 3, log=log)
     widen_for_roughness(ev, h0.fit, log)
     h = Hypothesis(eff, eff.attach, Coordinates(base.axes + Coordinates.of(
         None, eff.parameters()).axes))

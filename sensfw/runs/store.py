@@ -16,6 +16,7 @@ import io
 import json
 import os
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -41,16 +42,28 @@ def _atomic_write(path: Path, data: bytes) -> None:
 
 
 class RunStore:
-    """Run entries in ``folder`` (created on first write)."""
+    """Run entries in ``folder`` (created on first write). ``read_also``: other run stores'
+    folders read (never written) where ``folder`` lacks a run, e.g. the runs of the
+    diagnosis an ``augment`` starts from."""
 
-    def __init__(self, folder: str | os.PathLike):
+    def __init__(self, folder: str | os.PathLike, read_also: Sequence[str | os.PathLike] = ()):
         self.folder = Path(folder)
+        self.read_also = [RunStore(f) for f in read_also]
 
     def _paths(self, key: str) -> tuple[Path, Path]:
         return self.folder / f"{key}.json", self.folder / f"{key}.npz"
 
     def record(self, key: str) -> dict | None:
         """The committed record of ``key``, or None if absent or not intact."""
+        return next((m for _, m in self._found(key)), None)
+
+    def _found(self, key: str):
+        for store in (self, *self.read_also):
+            meta = store._own_record(key)
+            if meta is not None:
+                yield store, meta
+
+    def _own_record(self, key: str) -> dict | None:
         meta_path, data_path = self._paths(key)
         try:
             meta = json.loads(meta_path.read_text())
@@ -73,13 +86,13 @@ class RunStore:
 
     def load(self, key: str) -> RunResult | None:
         """The stored result of ``key`` (signals loaded), or None if absent/corrupt."""
-        meta = self.record(key)
+        store, meta = next(self._found(key), (None, None))
         if meta is None:
             return None
         if meta["status"] == "failed":
             return RunResult(key, False, error=meta.get("error"), wall=meta.get("wall", 0.0),
                              cached=True)
-        _, data_path = self._paths(key)
+        _, data_path = store._paths(key)
         with np.load(data_path, allow_pickle=False) as npz:
             arrays = {k: npz[k] for k in npz.files}
         return RunResult(key, True, signals=Signals.from_arrays(arrays),

@@ -67,6 +67,25 @@ def test_corrupt_or_half_written_entries_read_as_absent(tmp_path):
     assert store.load(s.key()) is None and not store.has(s.key())
 
 
+def test_a_store_reads_another_store_and_writes_only_its_own(tmp_path):
+    """`augment --start-from` reads the diagnosis's runs: found there, bitwise, never
+    written there; a corrupt entry there reads as absent."""
+    first, second = RunStore(tmp_path / "diagnose"), RunStore(tmp_path / "augment",
+                                                              read_also=[tmp_path / "diagnose"])
+    s, t = spec(), spec(k1=5000.0)
+    res = execute(s)
+    first.save(s, res)
+    back = second.load(s.key())
+    assert back is not None and back.cached and second.has(s.key())
+    assert np.array_equal(back.signals.channels["a1"], res.signals.channels["a1"])
+    second.save(t, execute(t))
+    assert second.has(t.key()) and not first.has(t.key())
+    assert first.keys() == [s.key()] and second.keys() == [t.key()]
+    data = tmp_path / "diagnose" / f"{s.key()}.npz"
+    data.write_bytes(data.read_bytes()[:100])
+    assert second.load(s.key()) is None
+
+
 def test_failed_runs_are_recorded_with_their_reason(tmp_path):
     store = RunStore(tmp_path)
     m = models.get(FAULT_INJECTION)(model="two_dof", diverge={"parameter": "k1",
