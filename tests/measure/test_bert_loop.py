@@ -1,7 +1,7 @@
 """The measurement loop on real data (issue 14, item 4): the bolted lap-joint beam of
 UNESP-BERT (``../shared/data/bert``; skipped when absent), six amplifier levels 0.05-0.30 V.
 
-The calibration itself (``sensfw calibrate`` at 0.05 V: ~100 simulations, 3.5 minutes on 2
+The calibration itself (``sensfw calibrate`` at 0.05 V: 64 simulations, 3.5 minutes on 2
 cores) is too slow for the suite; its result is stored here (``LINEAR``, printed by
 ``sensfw calibrate studies/bert.toml -m .../level_0p05``, README "worked example") and the
 test runs what follows from it: ``sensfw compare`` of that calibrated linear model on all six
