@@ -193,6 +193,20 @@ class Study:
         changes, ok = self._overrides(self.spec.parameters, declared, "parameters", problems)
         if not ok:
             return None
+        own = self.model.parameters()
+        for name, vals in changes.items():  # the model refuses values outside its own range
+            if name not in own:
+                continue
+            p = own[name]
+            for field_name, v in vals.items():
+                if not p.min <= v <= p.max:
+                    problems.append((f"parameters.{name}.{field_name}",
+                                     f"{v:g} {p.unit} is outside the range the model "
+                                     f"{self.spec.model.name} accepts, [{p.min:g}, "
+                                     f"{p.max:g}] {p.unit}"))
+                    ok = False
+        if not ok:
+            return None
         try:
             return declared.with_bounds(changes)
         except Exception as err:  # unreachable after the checks above, kept defensive

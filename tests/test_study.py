@@ -64,6 +64,19 @@ def test_all_problems_reported_at_once_with_dotted_paths():
     assert "unknown surrogate 'eq19'; available:" in got["stages[1].surrogates[0]"]
 
 
+def test_a_range_beyond_what_the_model_accepts_is_refused_before_anything_runs():
+    # the model checks every value against its own table when it simulates: a study range
+    # beyond it would fail in the middle of a design or a calibration
+    from sensfw.plugins import models
+
+    declared = models.get(QUICK["model"]["name"])().parameters()["slide_stiffness"]
+    data = copy.deepcopy(QUICK)
+    data["parameters"] = {"slide_stiffness": {"max": f"{declared.max * 10:g} N/mm"}}
+    got = problems(data)
+    assert "outside the range the model" in got["parameters.slide_stiffness.max"]
+    assert f"{declared.max:g}" in got["parameters.slide_stiffness.max"]
+
+
 def test_stage_references_and_channels_are_checked():
     data = copy.deepcopy(QUICK)
     data["stages"][1]["variables"] = "selected:sreen"

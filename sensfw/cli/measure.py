@@ -107,12 +107,28 @@ def simulate(
 
 
 
+def _band_option(text: str | None, option: str) -> tuple[float, float] | None:
+    """``"LO,HI"`` (Hz) -> ``(LO, HI)``, or a clear error naming the option."""
+    if text is None:
+        return None
+    try:
+        lo, hi = (float(x) for x in text.split(","))
+    except ValueError:
+        raise SensfwError(f"{option} {text!r}: expected LO,HI in Hz (e.g. 80,105)") from None
+    if not 0 < lo < hi:
+        raise SensfwError(f"{option} {text!r}: expected 0 < LO < HI")
+    return lo, hi
+
+
 @app.command()
 @_user_errors
 def compare(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
+    error_band: Annotated[str | None, typer.Option(
+        help="also the FRF error over LO,HI Hz (RMS of the dB difference line by line)"
+    )] = None,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -125,6 +141,7 @@ def compare(
     from ..study import Study
 
     study = Study.load(study_file)
+    band = _band_option(error_band, "--error-band")
     meas = load_measurements(study, [str(m) for m in measured])
     for m in meas:
         for note in m.notes:
@@ -132,14 +149,24 @@ def compare(
                 console.print(f"[yellow]notice:[/] {m.file}: {note}", highlight=False)
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_measurements(study, meas, runner)
-    _json(out_dir / "compare.json", result.to_dict())
+    data = result.to_dict()
+    if band is not None:
+        for c, d in zip(result.levels, data["levels"], strict=True):
+            d["frf_error_db"]["band_hz"] = list(band)
+            d["frf_error_db"]["rms_in_band"] = c.frf_rms_db_between(*band)
+    _json(out_dir / "compare.json", data)
     write_compare_report(study, result.levels, result.pairs, result.amplitude, result.notes,
                          out_dir / "report.html")
     for c in result.levels:
         thd = "" if c.thd_model is None else \
             f"; THD model {c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %"
+        inband = "" if band is None else \
+            f", {c.frf_rms_db_between(*band):.2f} dB over {band[0]:g}-{band[1]:g} Hz"
+        res = "".join(f"; resonance {r['measured_hz']:.2f} Hz measured, "
+                      f"{r['model_hz']:.2f} Hz model" for r in c.resonances
+                      if r["measured_hz"] and r["model_hz"])
         out.print(f"level {c.level:.3g} {c.unit}: FRF error {c.frf_rms_db:.2f} dB RMS "
-                  f"(noise floor {c.noise_floor_db:.2f} dB){thd}")
+                  f"(noise floor {c.noise_floor_db:.2f} dB){inband}{res}{thd}")
     if result.amplitude:
         for line in result.amplitude["summary"]:
             out.print("  " + line)

@@ -368,6 +368,17 @@ class LevelComparison:
         """RMS of the band errors within the dynamic range."""
         return float(np.sqrt(np.mean([b["mean_db"] ** 2 for b in self.used_bands])))
 
+    def frf_rms_db_between(self, fmin: float, fmax: float) -> float:
+        """RMS over the lines in ``[fmin, fmax]`` of the dB difference model - measurement
+        of the smoothed FRFs (:func:`frf_db`): the error of one band as a user states it
+        ("dB RMS over 80-105 Hz")."""
+        sel = (self.f >= fmin) & (self.f <= fmax)
+        if not sel.any():
+            raise ValueError(f"no FRF line in {fmin:g}-{fmax:g} Hz (the comparison covers "
+                             f"{self.f[0]:g}-{self.f[-1]:g} Hz)")
+        d = self.db_model[sel] - self.db_measured[sel]
+        return float(np.sqrt(np.mean(d * d)))
+
     def to_dict(self) -> dict:
         used = {b["centre_hz"] for b in self.used_bands}
         bands = [{**b, "used": b["centre_hz"] in used} for b in self.bands]

@@ -25,7 +25,9 @@ PARAMETERS = ParameterSet([
     _P("density", "kg/m^3", 2700.0, 2600.0, 2800.0, "density of the aluminium beams", "Beams"),
     _P("damping_ratio", "", 0.01, 0.001, 0.03, "modal damping ratio of every mode of the "
        "linear structure (material, clamp, the shaker's back-EMF, air)", "Beams"),
-    _P("joint_stiffness", "N/mm", 1.0e5, 1.0e4, 1.0e6, "tangential (slip) stiffness of the "
+    # up to a stuck interface: the overlap's own shear stiffness G A / t = 26 GPa x (40 x
+    # 25.4 mm^2) / 3.175 mm ~ 8e6 N/mm (the UNESP-BERT beam at 0.05 V calibrates above 1e6)
+    _P("joint_stiffness", "N/mm", 1.0e5, 1.0e4, 1.0e7, "tangential (slip) stiffness of the "
        "lap joint's interface, summed over its interface points", "Joint"),
     _P("joint_damping", "N*s/mm", 0.05, 0.0, 1.0, "viscous damping of the joint's "
        "interface slip", "Joint"),
