@@ -319,6 +319,7 @@ class LevelComparison:
     thd_measured: float | None
     notes: list[str] = field(default_factory=list)
     unit: str = "N"  # of the excitation channel (the FRF's denominator)
+    output_unit: str = "m/s²"  # of the compared channel (the FRF's numerator)
     dc_model: float = 0.0
     dc_measured: float = 0.0
     dc_standard_error: float = 0.0  # of dc_measured, from the record's noise
@@ -433,6 +434,10 @@ def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges)
     return hit[1], hit[2]
 
 
+def _unit(u: str) -> str:
+    return u.replace("^2", "²")
+
+
 def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[float, float],
                   level: float, file: str = "", detail: bool = True) -> LevelComparison:
     """The model's record against the measured one on ``channel`` (module docstring).
@@ -480,6 +485,7 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
     return LevelComparison(level=level, file=file, f=f, db_model=dbm, db_measured=dbx,
                            bands=bands, resonances=res, harmonics=rows, thd_model=thd(hm),
                            thd_measured=thd(hx), unit=measured.units.get("force", "N"),
+                           output_unit=_unit(measured.units.get(channel, "m/s^2")),
                            dc_model=dc_offset(model, channel),
                            dc_measured=dc_offset(measured, channel),
                            dc_standard_error=dc_standard_error(measured, channel),

@@ -16,14 +16,17 @@ def frf_overlay(comparisons, extra=None, title="FRF: model against measurement")
     colors = plt.cm.tab10(np.arange(10))
     for i, c in enumerate(comparisons):
         ax.semilogx(c.f, c.db_measured, color=colors[i % 10], lw=1.4,
-                    label=f"measured {c.level:.3g} N")
+                    label=f"measured {c.level:.3g} {c.unit}")
         ax.semilogx(c.f, c.db_model, color=colors[i % 10], lw=1.0, ls="--",
-                    label=f"model {c.level:.3g} N")
+                    label=f"model {c.level:.3g} {c.unit}")
     for label, cs in (extra or {}).items():
         for c in cs:
-            ax.semilogx(c.f, c.db_model, lw=1.0, ls=":", label=f"{label} {c.level:.3g} N")
+            ax.semilogx(c.f, c.db_model, lw=1.0, ls=":",
+                        label=f"{label} {c.level:.3g} {c.unit}")
     ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("|H| (dB re 1 (m/s²)/N)")
+    if comparisons:
+        c = comparisons[0]
+        ax.set_ylabel(f"|H| (dB re 1 ({c.output_unit})/{c.unit})")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
@@ -35,7 +38,7 @@ def band_errors(comparisons):
     width = 0.8 / max(len(comparisons), 1)
     for i, c in enumerate(comparisons):
         x = np.arange(len(c.bands)) + i * width
-        ax.bar(x, [b["mean_db"] for b in c.bands], width, label=f"{c.level:.3g} N")
+        ax.bar(x, [b["mean_db"] for b in c.bands], width, label=f"{c.level:.3g} {c.unit}")
     if comparisons:
         ax.set_xticks(np.arange(len(comparisons[0].bands)),
                       [f"{b['centre_hz']:.0f}" for b in comparisons[0].bands], rotation=60,
@@ -53,15 +56,18 @@ def order_spectra(pairs, channel):
     from ..signal import order_spectrum
 
     fig, ax = plt.subplots(figsize=(10, 3.6))
+    unit = out_unit = ""
     for level, meas, model in pairs:
+        unit = meas.units.get("force", "N")
+        out_unit = meas.units.get(channel, "m/s^2").replace("^2", "²")
         for sig, ls, who in ((meas, "-", "measured"), (model, "--", "model")):
             if sig.f_inst is None:  # not a sweep (random excitation): no orders
                 continue
             s = sig.sweep()
             n, P = order_spectrum(s.channel(channel), s.fs, s.f_inst)
-            ax.semilogy(n, P, ls=ls, lw=1, label=f"{who} {level:.3g} N")
+            ax.semilogy(n, P, ls=ls, lw=1, label=f"{who} {level:.3g} {unit}")
     ax.set_xlabel("order")
-    ax.set_ylabel("RMS amplitude (m/s²)")
+    ax.set_ylabel(f"RMS amplitude ({out_unit})")
     ax.set_title("Order spectra (harmonics of the chirp at integer orders)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
@@ -77,7 +83,7 @@ def spectrograms(meas, model, channel, level):
         f, t, S = spectrogram(sig.channel(channel), sig.fs)
         vmax = np.nanmax(S)
         im = ax.pcolormesh(t, f, S, shading="auto", vmin=vmax - 80, vmax=vmax)
-        ax.set_title(f"{who}, {level:.3g} N")
+        ax.set_title(f"{who}, {level:.3g} {meas.units.get('force', 'N')}")
         ax.set_xlabel("time (s)")
     axes[0].set_ylabel("frequency (Hz)")
     fig.colorbar(im, ax=axes, label="dB")
