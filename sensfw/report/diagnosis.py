@@ -51,32 +51,36 @@ def frf_levels(pairs: dict[str, list], title: str):
 
 def resonance_levels(pairs: dict[str, list]):
     """Frequency of the strongest measured resonances against level, measured and each
-    model's nearest peak: the amplitude dependence the winner must reproduce."""
+    model's nearest peak (within 5 %), as a shift from the measured frequency at the lowest
+    level: the amplitude dependence the winner must reproduce."""
     first = next(iter(pairs.values()))
     levels = [c.level for c in first]
     top = sorted(first[0].peaks_measured, key=lambda p: -p["prominence_db"])[:3]
     fig, ax = plt.subplots(figsize=(7.5, 3.8))
     colors = plt.cm.tab10(np.arange(10))
+    styles = [("--", "x"), (":", "+"), ("-.", "^"), ((0, (1, 3)), "v")]
 
-    def track(comps, which: str, f_ref: float) -> list[float]:
+    def track(comps, which: str, f_ref: float) -> np.ndarray:
         out = []
         for c in comps:
             peaks = c.peaks_measured if which == "measured" else c.peaks_model
-            near = [p["frequency"] for p in peaks if abs(np.log(p["frequency"] / f_ref)) < 0.15]
+            near = [p["frequency"] for p in peaks if abs(np.log(p["frequency"] / f_ref)) < 0.05]
             out.append(min(near, key=lambda f: abs(f - f_ref)) if near else np.nan)
-        return out
+        return 100 * (np.array(out) / f_ref - 1)
 
     for k, ref in enumerate(top):
         f_ref = ref["frequency"]
         ax.plot(levels, track(first, "measured", f_ref), "o-", color=colors[k], lw=2,
-                label=f"measured ~{f_ref:.0f} Hz")
+                label=f"measured {f_ref:.0f} Hz")
         for j, (label, comps) in enumerate(pairs.items()):
             if comps is not None:
-                ax.plot(levels, track(comps, "model", f_ref), ls="--:"[j % 2], marker="x",
+                ls, marker = styles[j % len(styles)]
+                ax.plot(levels, track(comps, "model", f_ref), ls=ls, marker=marker,
                         color=colors[k], lw=1, label=label if k == 0 else None)
     ax.set_xscale("log")
-    ax.set_xlabel("excitation level")
-    ax.set_ylabel("resonance frequency (Hz)")
+    unit = getattr(first[0], "unit", "")
+    ax.set_xlabel(f"excitation level ({unit})" if unit else "excitation level")
+    ax.set_ylabel("shift from measured at lowest level (%)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title("Amplitude dependence: resonances against level")
