@@ -34,6 +34,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--case", choices=["offsets", "mode", "both"], default="both")
+    ap.add_argument("--verbose", action="store_true", help="print the diagnosis's log")
     args = ap.parse_args()
     from sensfw.measure.diagnose import diagnose
     from sensfw.measure.io import write_csv
@@ -56,15 +57,23 @@ def main() -> None:
         t0 = time.perf_counter()
         with Runner(RunStore(tmp / "runs"), backend="processes",
                     workers=args.workers) as runner:
-            res = diagnose(study, load_measurements(study, [str(f)]), runner)
+            res = diagnose(study, load_measurements(study, [str(f)]), runner,
+                           log=print if args.verbose else (lambda s: None))
         wall = time.perf_counter() - t0
         print(f"{case}: verdict {res.verdict} ({res.reason})")
         print(f"  {res.n_simulations} simulations (bar 300), {wall:.0f} s wall (bar 600 s, "
               f"{args.workers} workers); one simulation {one:.2f} s: overhead x"
               f"{wall / (res.n_simulations * one / args.workers):.2f}")
-        for c in res.rows[0]["calibration"]:
-            print(f"  {c['name']} = {c['value']:.4g} [{c['interval'][0]:.4g}, "
-                  f"{c['interval'][1]:.4g}] {' '.join(c['flags'])}")
+        truth = {**study.parameters.nominal(), **OFFSETS,
+                 "slide_friction_velocity": OFFSETS["slide_v_friction"]}
+        rows = [res.rows[0]] + [r for r in res.rows[1:] if r["hypothesis"] == res.verdict]
+        for row in rows:
+            print(f"  {row['hypothesis']}: chi2 {row['chi2']:.1f}")
+            for c in row["calibration"]:
+                t = truth.get(c["name"])
+                print(f"    {c['name']} = {c['value']:.4g} [{c['interval'][0]:.4g}, "
+                      f"{c['interval'][1]:.4g}]" + (f" (truth {t:.4g})" if t else "")
+                      + f" {' '.join(c['flags'])}")
 
 
 if __name__ == "__main__":

@@ -151,10 +151,19 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     # parameters cost in BIC
     chosen = [h for h in ranked[:refine]
               if h.screen_chi2 < h0.fit.chi2 - (h.k - h0.k) * math.log(n)]
+    if chosen and discrepancy.fits(h0.fit.best.w, h0.k):  # the verdict is "parameters"
+        log("the recalibrated parameters explain the measurement to its noise: no "
+            "candidate is calibrated")
+        chosen = []
     for i, h in enumerate(chosen):
         left = max(budget - ev.n_simulations, 0)
+        share = left // max(len(chosen) - i, 1)
+        if i and share < 2 * h.k + 4:  # the leader is always calibrated, the others in budget
+            h.notes.append("not calibrated: the simulation budget was spent")
+            continue
         log(f"calibrating {h.name} jointly with the base variables")
-        _calibrate_candidate(ev, h0, h, left // max(len(chosen) - i, 1), log)
+        _calibrate_candidate(ev, h0, h, share, log)
+    chosen = [h for h in chosen if h.fit is not None]
     lead = min(chosen, key=lambda h: h.fit.chi2) if chosen else None
     if lead is not None and not discrepancy.fits(lead.fit.best.w, lead.k):
         # the leader again from its best start on another base: the joint space has
@@ -172,7 +181,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             if again.chi2 < lead.fit.chi2:
                 again.evaluations = lead.fit.evaluations + again.evaluations
                 lead.fit = again
-    if chosen:
+    if chosen and budget - ev.n_simulations >= 4 * h0.k:
         _refresh_h0(ev, h0, chosen, budget - ev.n_simulations, log)
     for h in ranked:  # screened only: their best evaluated point stands
         if h.fit is None:
@@ -344,7 +353,7 @@ def _refresh_h0(ev: Evaluator, h0: Hypothesis, chosen: Sequence[Hypothesis], bud
     log(f"H0 again from a candidate's base values (chi2 {h0.fit.chi2:.4g} -> "
         f"{best.chi2:.4g} before calibrating)")
     again = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), h0.coords, best,
-                      budget=max(budget, 4 * len(h0.coords)), log=log)
+                      budget=budget, log=log)
     again.evaluations = h0.fit.evaluations + again.evaluations
     h0.notes.append(f"calibrated again from a candidate's base values: chi2 "
                     f"{h0.fit.chi2:.4g} -> {again.chi2:.4g}")

@@ -36,7 +36,7 @@ def base_points(h0, nominal: Mapping[str, float] | None, extra: int = 1
 
 
 def screen(ev: Evaluator, h0, hyps: Sequence, h0_cmp, log,
-           nominal: Mapping[str, float] | None = None, keep: int = 8) -> None:
+           nominal: Mapping[str, float] | None = None, keep: int = 6) -> None:
     """Each candidate at its probes (the neutral values make it vanish) from the base points
     of :func:`base_points`, and at the point the linearised joint fit predicts from H0: the base
     variables moved by H0's Jacobian and the effect scaled along the probe's direction, so
