@@ -20,6 +20,9 @@ sampled signals, ``None`` (the model then feeds the samples step by step:
 :mod:`sensfw.models.drive`). :func:`make_excitation` rebuilds one from its
 :meth:`~Excitation.to_dict`. (A little over 400 lines: the five kinds share one contract and
 are read together.)
+
+(A little over 400 lines: the five excitation kinds share one interface and one rule for
+what enters a run's hash, kept side by side.)
 """
 
 from __future__ import annotations
