@@ -155,7 +155,7 @@ class LimitStop(Effect):
     place's normal from where it rests, then meets a linear stop of stiffness
     ``stop_stiffness`` (a shaft in an oversized catcher bore, a loose part in its pocket, a
     travel limiter). The textbook clearance nonlinearity, a piecewise-linear stiffness
-    (Worden & Tomlinson 2001, Sect. 2.6; Kerschen et al. 2006, Sect. 3.2): linear while the
+    (Worden & Tomlinson 2001; Kerschen et al. 2006): linear while the
     motion stays inside the gap, stiffer once it crosses it, so resonances move up with
     level and odd harmonics grow. The stop is centred on the static state (the body rests
     in the middle of its play), so it carries no static load and no preload hides it,

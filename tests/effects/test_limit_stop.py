@@ -46,7 +46,7 @@ def test_the_stop_carries_no_static_load(shaft):
 def test_the_stop_force_is_the_piecewise_linear_clearance_law(shaft, d_um):
     """Move the crankshaft by ``d`` along its transverse axis (a translation: its end point
     moves by ``d``) from the static state: the stop adds ``-k (|d| - gap) sign(d)`` once
-    ``|d|`` exceeds the gap and nothing inside it (Worden & Tomlinson 2001, Sect. 2.6)."""
+    ``|d|`` exceeds the gap and nothing inside it (Worden & Tomlinson 2001)."""
     plain, model, p = shaft
     q0 = model.equilibrium(p)
     mech, ref = model.mechanism(p), plain.mechanism(full(plain))
