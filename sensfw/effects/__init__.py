@@ -5,7 +5,7 @@ model, through the hooks the model offers there (:mod:`sensfw.models.places`).
 * :mod:`.contact` — effects on a contact's law: ``clearance``, ``friction``,
   ``contact_hardening``;
 * :mod:`.elements` — effects that add force elements, bodies or mass: ``damping``,
-  ``preload``, ``added_mass``, ``flexible_mode``;
+  ``preload``, ``added_mass``, ``flexible_mode``, ``limit_stop``;
 * :mod:`.joint` — effects at a bolted joint: ``micro_slip`` (Iwan model of Jenkins
   elements), ``cubic_stiffness`` (``clearance`` and ``damping`` fit joints too).
 """

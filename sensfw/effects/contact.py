@@ -58,10 +58,12 @@ class WithFriction:
 @effects.register("clearance")
 class Clearance(Effect):
     """Play at a contact (the shaft model's clutch has none in its bore): the parts rattle
-    once the excitation lifts them off their seat. At a joint, a dead zone of the slip law
-    (:class:`~sensfw.effects.joint.WithDeadZone`): the interface carries no tangential
-    force until it has slipped by the gap (a bolt bearing on its hole after its
-    clearance)."""
+    once the excitation lifts them off their seat. Where a static load keeps the contact
+    closed (every contact of the shaft model below about 0.5 N), the play is never crossed;
+    :class:`~sensfw.effects.elements.LimitStop` is play about the rest position. At a
+    joint, a dead zone of the slip law (:class:`~sensfw.effects.joint.WithDeadZone`): the
+    interface carries no tangential force until it has slipped by the gap (a bolt bearing
+    on its hole after its clearance)."""
 
     name = "clearance"
     fits = ("contact", "joint")

@@ -83,6 +83,11 @@ THRESHOLDS = {
     # prominence (dB), measured and model, of a resonance at a level for it to count
     # (weaker peaks: a few lines, noise-sensitive)
     "trend_prominence_db": 10.0,
+    # prominence (dB), measured and model, at every level for a softening/hardening judged
+    # on half-power values where the single-mode fit failed: a dominant peak whose
+    # half-power points are its own (at 10-15 dB, where the shaft model's contacts all
+    # rattle above 0.3 N, they moved by -1.6 % and +1.1 % at neighbouring modes)
+    "half_power_trend_prominence_db": 20.0,
     # prominence (dB) of a measured resonance the model lacks
     "new_peak_prominence_db": 10.0,
 }
@@ -240,6 +245,10 @@ def amplitude_table(levels: Sequence) -> dict:
                 "measured_prominence_db": a["prominence_db"] if a else None,
                 "model_prominence_db": b["prominence_db"] if b else None,
                 "shift_pct": 100 * math.log(fa / fb) if both else None,
+                # the same from the half-power frequencies whatever the method (a trend
+                # across levels must not mix single-mode fits and half-power values)
+                "half_power_shift_pct": 100 * math.log(a["frequency"] / b["frequency"])
+                if both else None,
                 "line_hz": line[lv],
                 "damping_ratio": za / zb if both and za and zb else None,
                 "method": method if (a or b) else None})
@@ -269,13 +278,15 @@ def amplitude_table(levels: Sequence) -> dict:
 
 
 # ---- the classes ----------------------------------------------------------------------------
-def _trends(table: dict, th: dict, fit: bool = True) -> list[dict]:
+def _trends(table: dict, th: dict, fit: bool = True, half_power: bool = False
+            ) -> list[dict]:
     """Per paired resonance present on both sides at two levels or more (``prominence``
     ``trend_prominence_db`` on both): the shifts and damping ratios per level, their change
     from the lowest to the highest such level and the least-squares slope of the shift
     against log10(level). ``fit``: only levels where both sides are clean modes (single-mode
-    fits); else the resonances with fewer than two such levels, on their half-power values
-    (frequencies on the FRF's lines, damping ratios biased: see :func:`classes`)."""
+    fits); else the resonances with fewer than two such levels, on their values (half-power
+    ones where the fit failed: frequencies on the FRF's lines, damping ratios biased; see
+    :func:`classes`), or with ``half_power`` on their half-power shifts at every level."""
     out = []
     for r in table["resonances"]:
         if r["kind"] != "paired":
@@ -291,7 +302,9 @@ def _trends(table: dict, th: dict, fit: bool = True) -> list[dict]:
         if len(rows) < 2:
             continue
         lv = np.array([x["level"] for x in rows])
-        s = np.array([x["shift_pct"] for x in rows])
+        s = np.array([x["half_power_shift_pct"] if half_power and
+                      x.get("half_power_shift_pct") is not None else x["shift_pct"]
+                      for x in rows])
         g = np.array([math.log(x["damping_ratio"]) if x["damping_ratio"] else np.nan
                       for x in rows])
         slope = float(np.polyfit(np.log10(lv), s, 1)[0]) if len(set(lv)) > 1 else 0.0
@@ -342,7 +355,9 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
       (single-mode fits, ``trend_prominence_db`` prominent) at two levels or more and whose
       shift ``100 ln(f_meas/f_model)`` falls / rises by more than ``shift_trend_pct`` from
       the lowest to the highest of them (the damping ratio's trend is part of the
-      evidence);
+      evidence); or, where the fit fails at all but one level, a resonance
+      ``half_power_trend_prominence_db`` prominent whose half-power shift does so by more
+      than ``shift_trend_pct`` plus two FRF lines;
     * ``amplitude_independent``: such a resonance whose shift stays beyond ``shift_pct``
       (same sign at every level) or whose damping ratio stays beyond ``exp(+-damping)``
       while neither changes by more than its trend threshold; or a prominent resonance
@@ -366,6 +381,17 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
     trends = _trends(table, th)
     soft = [t for t in trends if t["shift_trend_pct"] < -th["shift_trend_pct"]]
     hard = [t for t in trends if t["shift_trend_pct"] > th["shift_trend_pct"]]
+    # a resonance whose nonlinearity spoils the single-mode fit at a level (a hardening
+    # peak bends and jumps under a sweep): its half-power shifts, each known to one FRF
+    # line on either side, so a trend to two lines
+    for t in _trends(table, th, fit=False, half_power=True):
+        margin = th["shift_trend_pct"] + 2 * t["line_pct"]
+        if t["prominence_db"] < th["half_power_trend_prominence_db"]:
+            continue
+        if t["shift_trend_pct"] > margin:
+            hard.append(t)
+        elif t["shift_trend_pct"] < -margin:
+            soft.append(t)
     if soft:
         found["softening"] = {"resonances": soft}
     if hard:

@@ -127,8 +127,10 @@ class Hooks(Protocol):
         ...
 
     def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
-                  law: ForceLaw) -> None:
-        """Add a force element between a point of ``body0`` and a point of ``body1``."""
+                  law: ForceLaw, about_static: bool = False) -> None:
+        """Add a force element between a point of ``body0`` and a point of ``body1``;
+        ``about_static``: its ``u`` is measured from the static state, where it must carry
+        no force (the static state is solved without it)."""
         ...
 
     def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:

@@ -50,9 +50,9 @@ def test_every_effect_attaches_at_every_place_it_fits_and_has_a_static_state():
             worst = np.max(np.abs(model.generalized_forces(q0, np.zeros(len(q0)), p)))
             assert worst < 1e-6, (name, place, worst)
             tried += 1
-    # clearance, friction, hardening and damping at 8 contacts; damping, preload, mass and
-    # mode at 3 bodies
-    assert tried == 4 * 8 + 4 * 3
+    # clearance, friction, hardening and damping at 8 contacts; damping, preload, mass,
+    # mode and limit stop at 3 bodies
+    assert tried == 4 * 8 + 5 * 3
 
 
 def test_attach_names_a_real_place_of_a_fitting_kind():

@@ -234,3 +234,27 @@ def test_discrepancy_along_the_friction_velocity_at_a_stick_slip_setting(study, 
     assert lo <= truth <= hi, (row["value"], row["interval"])
     assert hi < start["slide_friction_velocity"], row["interval"]
     assert discrepancy.fits(fit.best.w, 1), fit.chi2
+
+
+def test_a_clearance_crossed_between_two_levels_is_found_with_its_gap(study, runner,
+                                                                      tmp_path):
+    """A limit stop (``limit_stop``, a clearance about the rest position) 0.06 um either
+    side of where the crankshaft's end rests, stiffness 1.5e3 N/mm, with the base offsets,
+    measured at 0.03 N (end motion 0.06 um peak: the gap is not crossed) and 0.1 N (0.2 um:
+    well across it). Neither value is the effect's nominal or a probe's. The verdict names
+    the stop at the crankshaft, its gap within 30 % (the issue's bar; measured 6.28e-5 mm,
+    +5 %) and the base parameters recovered within 15 % as in the offsets-only case."""
+    hidden = "limit_stop@crankshaft:stop_stiffness=1.5e3,stop_gap=6e-5"
+    meas = measure(study, tmp_path, hidden, levels=(0.03, 0.1))
+    res = diagnose(study, meas, runner, candidates=["limit_stop@crankshaft",
+                                                    "limit_stop@driveshaft",
+                                                    "contact_hardening@bearing_l1"], refine=1)
+    assert res.verdict == "limit_stop@crankshaft", (
+        res.reason, [(r["hypothesis"], round(r["chi2"], 1)) for r in res.rows])
+    row = next(r for r in res.rows if r["hypothesis"] == res.verdict)
+    values = {c["name"]: c for c in row["calibration"]}
+    assert values["stop_gap"]["value"] == pytest.approx(6e-5, rel=0.3), values["stop_gap"]
+    for name, truth in CALIBRATED.items():
+        assert values[name]["value"] == pytest.approx(truth, rel=0.15), values[name]
+    assert "hardening" in res.signature_classes
+    check_nested(res)

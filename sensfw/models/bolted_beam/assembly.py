@@ -16,7 +16,7 @@ Reduced coordinate vector ``z = [points (u, w) ..., modal eta ..., added bodies 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -79,13 +79,14 @@ class BeamAssembly:
         self.laws[place] = law
 
     def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
-                  law: ForceLaw) -> None:
+                  law: ForceLaw, about_static: bool = False) -> None:
         self._check(body0, r0)
         self._check(body1, r1)
         if any(ln.name == name for ln in self.links):
             raise SensfwError(f"a force element named {name!r} exists already")
         self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
-                               lambda ops, u, v, contact: law(ops, u, v)))
+                               lambda ops, u, v, contact: law(ops, u, v),
+                               about_static=about_static))
 
     def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
         body, r = follows
@@ -212,6 +213,22 @@ class Structure:
             j = self.body_index[b]
             z[j:j + 2] = (0.0, 0.0) if i is None else z[i:i + 2]
 
+    def anchor(self, z: np.ndarray | None) -> None:
+        """Measure the links declared ``about_static`` from the static state ``z`` (see
+        :class:`~sensfw.models.planar.Link`); ``None`` releases them."""
+        a, out = self.assembly, []
+        for ln in a.links:
+            if ln.about_static:
+                off = None
+                if z is not None:
+                    i0, i1 = self.coordinate(ln.body0, ln.r0), self.coordinate(ln.body1, ln.r1)
+                    u0 = (0.0, 0.0) if i0 is None else (z[i0], z[i0 + 1])
+                    u1 = (0.0, 0.0) if i1 is None else (z[i1], z[i1 + 1])
+                    off = (float(u1[0] - u0[0]), float(u1[1] - u0[1]))
+                ln = replace(ln, offset=off)
+            out.append(ln)
+        a.links = out
+
     def reference(self, body: str, r: Point) -> tuple[float, float]:
         """Reference position (rig coordinates) of a point of a body."""
         if body in self.assembly.added:
@@ -229,13 +246,16 @@ class Structure:
         f = np.zeros(np.broadcast_shapes(z.shape, zd.shape))
         zero = np.zeros(f.shape[1:])
         for ln in (a.links[:a.base_links] if base else a.links):
+            if ln.about_static and ln.offset is None:
+                continue  # solving the static state: the link carries no static force
             i0, i1 = self.coordinate(ln.body0, ln.r0), self.coordinate(ln.body1, ln.r1)
             u0 = (zero, zero) if i0 is None else (z[i0], z[i0 + 1])
             v0 = (zero, zero) if i0 is None else (zd[i0], zd[i0 + 1])
             u1 = (zero, zero) if i1 is None else (z[i1], z[i1 + 1])
             v1 = (zero, zero) if i1 is None else (zd[i1], zd[i1 + 1])
-            fx, fy = ln.law(ops, (u1[0] - u0[0], u1[1] - u0[1]), (v1[0] - v0[0],
-                                                                     v1[1] - v0[1]), contact)
+            ox, oy = ln.offset or (0.0, 0.0)
+            fx, fy = ln.law(ops, (u1[0] - u0[0] - ox, u1[1] - u0[1] - oy),
+                            (v1[0] - v0[0], v1[1] - v0[1]), contact)
             for i, s in ((i1, 1.0), (i0, -1.0)):
                 if i is not None:
                     f[i] += s * fx
@@ -294,8 +314,10 @@ def solve_static(structure: Structure, load: np.ndarray | None = None,
 
     z = structure.start() if guess is None else np.array(guess, float)
     structure.follow(z)
+    structure.anchor(None)  # links centred on the static state carry no static force
     r0 = structure.residual(z, load=load)
     if np.max(np.abs(r0), initial=0.0) < 1e-9:
+        structure.anchor(z)
         return z
     scale = 1e-6
     sol = least_squares(lambda x: structure.residual(x * scale, load=load), z / scale,
@@ -304,4 +326,5 @@ def solve_static(structure: Structure, load: np.ndarray | None = None,
     if not np.all(np.isfinite(sol.x)) or worst > 1e-6:
         raise SimulationError(model, f"no static equilibrium (residual {worst:.3g} N)",
                               params or {})
+    structure.anchor(sol.x * scale)
     return sol.x * scale

@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from ...errors import SensfwError
 from ..planar.exudyn import Built, link_function, load_function, user_function
 from .assembly import Structure
 
@@ -89,7 +90,11 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
         p1 = structure.reference(ln.body1, ln.r1)
         if ln.body0 == a.ground:
             p0 = (float(ln.r0[0]), float(ln.r0[1]))
-        off = [p1[0] - p0[0], p1[1] - p0[1]]
+        if ln.about_static and ln.offset is None:
+            raise SensfwError(f"force element {ln.name!r} is measured from the static state, "
+                              "which was not solved for this structure")
+        o = ln.offset or (0.0, 0.0)  # a link centred on the static state: its u there
+        off = [p1[0] - p0[0] + o[0], p1[1] - p0[1] + o[1]]
         co = mbs.AddObject(ei.ObjectConnectorCartesianSpringDamper(
             markerNumbers=[m0, m1], stiffness=[0, 0, 0], damping=[0, 0, 0],
             offset=[0, 0, 0], name=ln.name))

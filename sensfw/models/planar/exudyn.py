@@ -42,6 +42,7 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
     from exudyn import itemInterface as ei
 
     layout = mech.layout()
+    mech.anchor(q0)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     bodies = {mech.ground: mbs.AddObject(ei.ObjectGround())}
@@ -69,8 +70,9 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
     for ln in mech.links:
         m0, m1 = marker(ln.body0, ln.r0), marker(ln.body1, ln.r1)
         # reference offset between the two points, removed inside the law
+        # (and, for a link centred on the static state, its displacement there)
         off = [reference[ln.body1][i] + ln.r1[i] - reference[ln.body0][i] - ln.r0[i]
-               for i in (0, 1)]
+               + (ln.offset[i] if ln.offset else 0.0) for i in (0, 1)]
         co = mbs.AddObject(ei.ObjectConnectorCartesianSpringDamper(
             markerNumbers=[m0, m1], stiffness=[0, 0, 0], damping=[0, 0, 0],
             offset=[0, 0, 0], name=ln.name))

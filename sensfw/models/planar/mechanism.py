@@ -53,6 +53,12 @@ class Link:
     body1: str
     r1: Point
     law: Callable
+    #: ``u`` measured from the static state instead of the reference configuration (an
+    #: element centred where the structure rests, e.g. a limit stop with play on both sides):
+    #: such a link carries no static force by construction, so the static state is solved
+    #: without it and ``offset`` (its ``u`` there) is set by :meth:`Mechanism.anchor`
+    about_static: bool = False
+    offset: Point | None = None
 
 
 class Contacts:
@@ -168,13 +174,14 @@ class Mechanism:
         self.laws[place] = law
 
     def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
-                  law: ForceLaw) -> None:
+                  law: ForceLaw, about_static: bool = False) -> None:
         for b in (body0, body1):
             self._body(b)
         if any(ln.name == name for ln in self.links):
             raise SensfwError(f"a force element named {name!r} exists already")
         self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
-                               lambda ops, u, v, contact: law(ops, u, v)))
+                               lambda ops, u, v, contact: law(ops, u, v),
+                               about_static=about_static))
 
     def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
         if any(b.name == name for b in self.bodies) or name == self.ground:
@@ -208,14 +215,36 @@ class Mechanism:
         layout = layout or self.layout()
         st = State(layout, self.ground, np.asarray(q, float), np.asarray(qd, float))
         for ln in self.links:
+            if ln.about_static and ln.offset is None:
+                continue  # solving the static state: the link carries no static force
             ux0, uy0, vx0, vy0 = st.point(ln.body0, ln.r0)
             ux1, uy1, vx1, vy1 = st.point(ln.body1, ln.r1)
-            fx, fy = ln.law(ops, (ux1 - ux0, uy1 - uy0), (vx1 - vx0, vy1 - vy0), contact)
+            ox, oy = ln.offset or (0.0, 0.0)
+            fx, fy = ln.law(ops, (ux1 - ux0 - ox, uy1 - uy0 - oy), (vx1 - vx0, vy1 - vy0),
+                            contact)
             st.apply(ln.body1, ln.r1, fx, fy)
             st.apply(ln.body0, ln.r0, -fx, -fy)
         iy = layout.y_index()
         st.f[iy] -= layout.masses()[iy] * G
         return st.f
+
+    def anchor(self, q0: np.ndarray | None) -> None:
+        """Measure the links declared ``about_static`` from the static state ``q0`` (their
+        relative displacement there becomes their offset); ``None`` releases them (while the
+        static state is solved they carry no force)."""
+        st = None if q0 is None else State(self.layout(), self.ground, np.asarray(q0, float),
+                                           np.zeros(len(q0)))
+        out = []
+        for ln in self.links:
+            if ln.about_static:
+                off = None
+                if st is not None:
+                    ux0, uy0, _, _ = st.point(ln.body0, ln.r0)
+                    ux1, uy1, _, _ = st.point(ln.body1, ln.r1)
+                    off = (float(ux1 - ux0), float(uy1 - uy0))
+                ln = replace(ln, offset=off)
+            out.append(ln)
+        self.links = out
 
     def follow(self, layout: Layout, q: np.ndarray) -> None:
         """Set the coordinates of bodies added by effects to the displacement of the point

@@ -96,6 +96,7 @@ def equilibrium(mech: Mechanism, guess: np.ndarray, model: str = "model",
     from scipy.optimize import least_squares
 
     layout = mech.layout()
+    mech.anchor(None)  # links centred on the static state carry no static force
     zero = np.zeros(layout.n)
     scale = np.full(layout.n, 1e-5)
     scale[layout.rotation_index()] = 1e-4
@@ -124,6 +125,7 @@ def equilibrium(mech: Mechanism, guess: np.ndarray, model: str = "model",
 
 def linear_contacts(mech: Mechanism, q0: np.ndarray) -> LinearContacts:
     """The linearised contacts at the static state ``q0``."""
+    mech.anchor(q0)
     rec = RecordingContacts()
     forces(mech, q0, np.zeros(len(q0)), rec)
     return LinearContacts(mech.laws, rec.static)
@@ -134,6 +136,7 @@ def linear_matrices(mech: Mechanism, q0: np.ndarray, contact=None
     """Mass, stiffness and damping matrices at the static state ``q0`` (central differences
     of the numpy forces; friction enters the damping through ``mu'(0)``)."""
     layout = mech.layout()
+    mech.anchor(q0)
     contact = contact or Contacts(numpy_ops(), mech.laws)
     rot = set(layout.rotation_index())
     n = len(q0)
