@@ -12,8 +12,7 @@ from ..models.contact import clearance_force
 from ..params import Parameter
 from ..plugins import effects
 from .base import Effect
-
-MM = 1e-3
+from .contact import MM
 
 
 @effects.register("damping")

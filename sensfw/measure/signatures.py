@@ -302,8 +302,7 @@ def _trends(table: dict, th: dict, fit: bool = True, half_power: bool = False
         if len(rows) < 2:
             continue
         lv = np.array([x["level"] for x in rows])
-        s = np.array([x["half_power_shift_pct"] if half_power and
-                      x.get("half_power_shift_pct") is not None else x["shift_pct"]
+        s = np.array([x["half_power_shift_pct" if half_power else "shift_pct"]
                       for x in rows])
         g = np.array([math.log(x["damping_ratio"]) if x["damping_ratio"] else np.nan
                       for x in rows])
@@ -385,9 +384,9 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
     # peak bends and jumps under a sweep): its half-power shifts, each known to one FRF
     # line on either side, so a trend to two lines
     for t in _trends(table, th, fit=False, half_power=True):
-        margin = th["shift_trend_pct"] + 2 * t["line_pct"]
         if t["prominence_db"] < th["half_power_trend_prominence_db"]:
             continue
+        margin = th["shift_trend_pct"] + 2 * t["line_pct"]
         if t["shift_trend_pct"] > margin:
             hard.append(t)
         elif t["shift_trend_pct"] < -margin:

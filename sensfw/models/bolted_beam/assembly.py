@@ -16,7 +16,7 @@ Reduced coordinate vector ``z = [points (u, w) ..., modal eta ..., added bodies 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,6 +24,7 @@ from ...errors import SensfwError
 from ..contact import numpy_ops
 from ..places import ForceLaw, Place, Point
 from ..planar import Contacts, Link
+from ..planar.mechanism import anchored
 from .fe import Beam, Mesh, Reduction, craig_bampton
 
 Key = tuple[str, float]  # (beam, x)
@@ -216,18 +217,12 @@ class Structure:
     def anchor(self, z: np.ndarray | None) -> None:
         """Measure the links declared ``about_static`` from the static state ``z`` (see
         :class:`~sensfw.models.planar.Link`); ``None`` releases them."""
-        a, out = self.assembly, []
-        for ln in a.links:
-            if ln.about_static:
-                off = None
-                if z is not None:
-                    i0, i1 = self.coordinate(ln.body0, ln.r0), self.coordinate(ln.body1, ln.r1)
-                    u0 = (0.0, 0.0) if i0 is None else (z[i0], z[i0 + 1])
-                    u1 = (0.0, 0.0) if i1 is None else (z[i1], z[i1 + 1])
-                    off = (float(u1[0] - u0[0]), float(u1[1] - u0[1]))
-                ln = replace(ln, offset=off)
-            out.append(ln)
-        a.links = out
+        def displacement(body, r):
+            i = self.coordinate(body, r)
+            return (0.0, 0.0) if i is None else (z[i], z[i + 1])
+
+        a = self.assembly
+        a.links = anchored(a.links, None if z is None else displacement)
 
     def reference(self, body: str, r: Point) -> tuple[float, float]:
         """Reference position (rig coordinates) of a point of a body."""

@@ -61,6 +61,23 @@ class Link:
     offset: Point | None = None
 
 
+def anchored(links: list[Link], displacement: Callable | None) -> list[Link]:
+    """``links`` with the offset of each ``about_static`` one set to its relative
+    displacement at the static state (``displacement(body, r) -> (ux, uy)`` of a body point
+    there), or cleared with ``None``."""
+    out = []
+    for ln in links:
+        if ln.about_static:
+            off = None
+            if displacement is not None:
+                (ux0, uy0), (ux1, uy1) = (displacement(ln.body0, ln.r0),
+                                          displacement(ln.body1, ln.r1))
+                off = (float(ux1 - ux0), float(uy1 - uy0))
+            ln = replace(ln, offset=off)
+        out.append(ln)
+    return out
+
+
 class Contacts:
     """How the force elements evaluate the contact places they contain.
 
@@ -229,22 +246,13 @@ class Mechanism:
         return st.f
 
     def anchor(self, q0: np.ndarray | None) -> None:
-        """Measure the links declared ``about_static`` from the static state ``q0`` (their
-        relative displacement there becomes their offset); ``None`` releases them (while the
-        static state is solved they carry no force)."""
-        st = None if q0 is None else State(self.layout(), self.ground, np.asarray(q0, float),
-                                           np.zeros(len(q0)))
-        out = []
-        for ln in self.links:
-            if ln.about_static:
-                off = None
-                if st is not None:
-                    ux0, uy0, _, _ = st.point(ln.body0, ln.r0)
-                    ux1, uy1, _, _ = st.point(ln.body1, ln.r1)
-                    off = (float(ux1 - ux0), float(uy1 - uy0))
-                ln = replace(ln, offset=off)
-            out.append(ln)
-        self.links = out
+        """Measure the links declared ``about_static`` from the static state ``q0``;
+        ``None`` releases them (while the static state is solved they carry no force)."""
+        if q0 is None:
+            self.links = anchored(self.links, None)
+            return
+        st = State(self.layout(), self.ground, np.asarray(q0, float), np.zeros(len(q0)))
+        self.links = anchored(self.links, lambda body, r: st.point(body, r)[:2])
 
     def follow(self, layout: Layout, q: np.ndarray) -> None:
         """Set the coordinates of bodies added by effects to the displacement of the point
