@@ -141,7 +141,9 @@ class ContactHardening(Effect):
     # measured on the shaft model (tests/measure/test_signatures.py): exponent 2 at the
     # gravity-loaded roller bearing L1 gives a constant +1.4 % shift of the 1.5 kHz mode and
     # H2/H1 13 dB above the model's at 0.03-0.1 N, no hardening; the textbook hardening needs
-    # a contact that opens and closes, which no place of that model offers below ~1 N
+    # a contact that opens and closes, which no place of that model offers below ~1 N, or
+    # one closed from zero load: cubic_stiffness at a body (a Duffing spring about the rest
+    # position) hardens and does nothing else there
     signature_classes = frozenset({"hardening", "amplitude_independent", "even_harmonics"})
     reference_penetration = 1e-7  # m
 

@@ -25,14 +25,16 @@ from .base import Effect
 MM = 1e-3
 
 
-def _decade_probes(effect: Effect, name: str) -> list[dict[str, float]]:
+def _decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
+                   ) -> list[dict[str, float]]:
     """Probes for an effect whose strength ``name`` spans decades (its axis starts at the
     neutral 0, so the default quarter/half/full steps would all be strong): the strength at
-    1 %, 10 % and all of its maximum, the other parameters at their nominal values."""
+    ``fractions`` of its maximum (1 %, 10 % and all of it), the other parameters at their
+    nominal values."""
     params = effect.parameters()
     nominal = {p.name: p.nominal for p in params}
     top = next(p.max for p in params if p.name == name)
-    return [{**nominal, name: top * f} for f in (0.01, 0.1, 1.0)]
+    return [{**nominal, name: top * f} for f in fractions]
 
 
 def _saturate(ops, v, v_reg):
@@ -153,32 +155,51 @@ class WithCubic:
 
 @effects.register("cubic_stiffness")
 class CubicStiffness(Effect):
-    """A cubic term in the joint's slip law, ``F = F_base(s) - k3 s^3``: the interface
-    stiffens as it slips further (bolt shank bearing on its hole, asperities flattening):
-    the resonances the joint takes part in move up with level (Duffing hardening)."""
+    """A hardening stiffness, the Duffing oscillator's ``-k3 e^3`` (Worden & Tomlinson
+    2001; Kerschen et al. 2006). At a joint, a cubic term in its slip law, ``F = F_base(s) -
+    k3 s^3``: the interface stiffens as it slips further (bolt shank bearing on its hole,
+    asperities flattening). At a body, a spring cubic in the displacement of the body point
+    from where it rests, along the place's normal: a contact the motion closes from zero
+    load, with no preload to linearise it (a part seated without play or preload, a ball
+    between two plates; two-sided, so no even harmonics). Either way the resonances it takes
+    part in move up with level, with no shift at small amplitude."""
 
     name = "cubic_stiffness"
-    fits = ("joint",)
-    preferred_places = ("joint",)
+    fits = ("joint", "body")
+    preferred_places = ("joint", "crankshaft")
     signatures = ("resonances move up as the level rises", "odd harmonics")
     signature_classes = frozenset({"hardening"})
     neutral: ClassVar[dict[str, float]] = {"cubic_stiffness": 0.0}
 
     def parameters(self):
-        # slips of 4-20 um at the UNESP-BERT levels: k3 s^2 ~ joint stiffness at 1e9
-        return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 0.0, 1.0e10,
+        # slips of 4-20 um at the UNESP-BERT levels: k3 s^2 ~ joint stiffness at 1e9; the
+        # shaft model's bodies move 0.06-0.2 um at 0.03-0.1 N: 3e10 lifts the crankshaft
+        # rocking mode 0.1 % at 0.03 N and 0.9 % at 0.1 N (tests/measure/test_signatures.py)
+        return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 0.0, 1.0e12,
                           "cubic coefficient of the joint's slip law", "Effect: "
                           "cubic_stiffness")]
 
     def probes(self, comparisons):
-        """The cubic coefficient at 1e8, 1e9 and 1e10 N/mm^3."""
-        return _decade_probes(self, "cubic_stiffness")
+        """The cubic coefficient at 1e8, 1e10 and 1e12 N/mm^3 (a joint's slip of microns
+        wants the low end, a body point moving a tenth of a micron the high end)."""
+        return _decade_probes(self, "cubic_stiffness", (1e-4, 1e-2, 1.0))
 
     def apply(self, place, hooks, p):
         k3 = p["cubic_stiffness"] / MM**3
         if k3 <= 0:  # neutral: the joint's own law, untouched
             return
-        hooks.set_contact_law(place.name, WithCubic(hooks.contact_law(place.name), k3))
+        if place.kind == "joint":
+            hooks.set_contact_law(place.name, WithCubic(hooks.contact_law(place.name), k3))
+            return
+        nx, ny = place.normal
+
+        def law(ops, u, v):
+            e = u[0] * nx + u[1] * ny
+            f = -k3 * e * e * e
+            return f * nx, f * ny
+
+        hooks.add_force(f"cubic_stiffness@{place.name}", place.body0 or hooks.ground,
+                        place.r0, place.body1, place.r1, law, about_static=True)
 
 
 @dataclass(frozen=True)

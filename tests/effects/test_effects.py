@@ -51,8 +51,8 @@ def test_every_effect_attaches_at_every_place_it_fits_and_has_a_static_state():
             assert worst < 1e-6, (name, place, worst)
             tried += 1
     # clearance, friction, hardening and damping at 8 contacts; damping, preload, mass,
-    # mode and limit stop at 3 bodies
-    assert tried == 4 * 8 + 5 * 3
+    # mode, limit stop and cubic stiffness at 3 bodies
+    assert tried == 4 * 8 + 6 * 3
 
 
 def test_attach_names_a_real_place_of_a_fitting_kind():

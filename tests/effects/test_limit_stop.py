@@ -1,7 +1,7 @@
-"""The limit stop (a clearance to a stop at a body place): its force law is the textbook
-piecewise-linear stiffness about the body's static state, checked against the analytic law
-with the shaft model's own numpy forces; it carries no static load, so the static state and
-the linearised model are those without it."""
+"""The limit stop (a clearance to a stop at a body place) and the cubic spring at a body: their
+force laws are the textbook piecewise-linear and Duffing stiffnesses about the body's static
+state, checked against the analytic laws with the shaft model's own numpy forces; they carry no
+static load, so the static state and the linearised model are those without them."""
 
 import numpy as np
 import pytest
@@ -84,3 +84,28 @@ def test_the_stop_acts_on_the_beam_too():
     for ch in base.channels:
         assert np.all(np.isfinite(tight.channels[ch]))
         assert not np.allclose(tight.channels[ch], base.channels[ch], rtol=1e-3), ch
+
+
+@pytest.mark.parametrize("d_um", [-0.2, -0.03, 0.05, 0.3])
+def test_a_cubic_spring_at_a_body_is_the_duffing_law_about_the_rest_position(d_um):
+    """``cubic_stiffness`` at a body: like the stop, measured from the static state (no
+    static load, the model's static state), and its force is ``-k3 d^3`` (Kerschen et al.
+    2006, the Duffing oscillator) at the body point, with its moment."""
+    k3 = 3e10  # N/mm^3
+    plain = ShaftAssembly()
+    model = ShaftAssembly(effects=[{"name": "cubic_stiffness", "attach": "crankshaft"}])
+    p = full(model, cubic_stiffness=k3)
+    q0 = model.equilibrium(p)
+    np.testing.assert_array_equal(q0, plain.equilibrium(full(plain)))
+    mech, ref = model.mechanism(p), plain.mechanism(full(plain))
+    mech.anchor(q0)
+    iy = mech.layout().offset["C"] + 1
+    d = d_um * 1e-6
+    q = q0.copy()
+    q[iy] += d
+    zero = np.zeros(len(q))
+    added = statics.forces(mech, q, zero) - statics.forces(ref, q, zero)
+    expected = -k3 * 1e9 * d**3  # N/mm^3 -> N/m^3
+    assert added[iy] == pytest.approx(expected, rel=1e-9)
+    assert added[iy + 1] == pytest.approx(model.geometry.x_force * expected, rel=1e-9)
+    assert np.max(np.abs(np.delete(added, [iy, iy + 1]))) == 0.0
