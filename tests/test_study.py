@@ -219,3 +219,20 @@ def test_cli_validate_reports_bad_options(tmp_path):
     assert "stages[1].design_options.levelz: unknown option; known: levels" in proc.stderr
     assert "stages[1].surrogates[0].interaction" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_cli_messages_keep_square_brackets(tmp_path):
+    """Errors, notices and progress lines are printed as they are: a ``[calibration]`` or
+    ``[excitation]`` in them is text, not rich markup that would vanish."""
+    from sensfw.cli.common import console, say
+
+    with console.capture() as cap:
+        say("H0: calibrating a, b ([calibration] parameters)")
+    assert "([calibration] parameters)" in cap.get()
+    bad = tmp_path / "bad[x].toml"
+    bad.write_text("[study]\nname = 'x'\n")
+    proc = subprocess.run([sys.executable, "-m", "sensfw", "validate", str(bad)],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "COLUMNS": "300"})
+    assert proc.returncode == 2
+    assert "bad[x].toml" in proc.stderr, proc.stderr

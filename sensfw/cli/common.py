@@ -11,6 +11,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from ..errors import SensfwError
 
@@ -18,7 +19,15 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Which parameters of a nonlinear multibody model matter, and does the "
                        "model agree with the rig?")
 console = Console(stderr=True)
-out = Console()
+#: results on stdout: plain text (square brackets in them are intervals, section names and
+#: file names, never rich markup)
+out = Console(markup=False)
+
+
+def say(text: str, style: str = "cyan") -> None:
+    """A progress line of a long command on stderr. ``text`` is printed as it is: its square
+    brackets (``[calibration] parameters``, a file name) are not taken for rich markup."""
+    console.print(f"[{style}]{escape(text)}[/]", highlight=False)
 
 
 Workers = Annotated[int | None, typer.Option(help="worker processes (default: cores)")]
@@ -33,8 +42,8 @@ def _user_errors(fn):
         try:
             return fn(*args, **kwargs)
         except SensfwError as err:
-            console.print(f"[bold red]error:[/] {err}", highlight=False, markup=True,
-                          soft_wrap=True)
+            console.print(f"[bold red]error:[/] {escape(str(err))}", highlight=False,
+                          markup=True, soft_wrap=True)
             raise typer.Exit(code=2) from None
         except KeyboardInterrupt:
             console.print("[yellow]interrupted; finished runs are kept in the run store[/]")

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 
 from ..errors import SensfwError
 from .common import (
@@ -22,6 +23,7 @@ from .common import (
     app,
     console,
     out,
+    say,
 )
 
 
@@ -146,7 +148,8 @@ def compare(
     for m in meas:
         for note in m.notes:
             if "not the study's" in note:
-                console.print(f"[yellow]notice:[/] {m.file}: {note}", highlight=False)
+                console.print(f"[yellow]notice:[/] {escape(f'{m.file}: {note}')}",
+                              highlight=False)
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_measurements(study, meas, runner)
     data = result.to_dict()
@@ -202,7 +205,7 @@ def diagnose(
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         names = [c.strip() for c in candidates.split(",")] if candidates else None
         result = run_diagnose(study, meas, runner, names, budget=budget,
-                              log=lambda s: console.print(f"[cyan]{s}"))
+                              log=say)
     data = {**result.to_dict(), "wall_s": time.perf_counter() - t0}
     _json(out_dir / "diagnose.json", data)
     write_diagnose_report(study, result, out_dir / "report.html")
@@ -277,7 +280,7 @@ def augment(
                   read_also=read_also) as runner:
         result = augment_module.augment(study, meas, runner, name, attach or None,
                                         start=start, base_start=base_start,
-                                        log=lambda s: console.print(f"[cyan]{s}"))
+                                        log=say)
     declared = {p.name: p for p in effects.get(name)().parameters()}
     calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
                   for k, v in result["params"].items()}
@@ -333,7 +336,7 @@ def calibrate(
     meas = load_measurements(study, [str(m) for m in measured])
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = recalibrate(study, meas, runner, budget=budget,
-                             log=lambda s: console.print(f"[cyan]{s}"))
+                             log=say)
     values = {k: v for k, v in result["base_parameters"].items()
               if v != study.parameters[k].nominal}
     text = set_nominals(study_file.read_text(encoding="utf-8"), values,

@@ -21,8 +21,8 @@ from .common import (
     _running,
     _user_errors,
     app,
-    console,
     out,
+    say,
 )
 
 
@@ -61,7 +61,7 @@ def run(
     runner = _runner(study, out_dir, workers, backend, scheduler, retry_failed, progress)
     t0 = time.perf_counter()
     try:
-        result = run_study(study, runner, log=lambda s: console.print(f"[cyan]{s}"))
+        result = run_study(study, runner, log=say)
     finally:
         runner.progress.close()
         runner.close()
@@ -153,7 +153,7 @@ def compare_designs_cmd(
         opts.setdefault(dname, {})[oname] = value
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_designs(study, runner, names, opts, reference_runs,
-                                 reference_surrogate, log=lambda s: console.print(f"[cyan]{s}"))
+                                 reference_surrogate, log=say)
     _json(out_dir / "designs.json", result)
     write_designs_report(study, result, out_dir / "designs.html")
     out.print(agreement_table(result).to_string())
