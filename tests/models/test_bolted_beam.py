@@ -254,6 +254,7 @@ def test_the_base_model_is_linear_and_halving_the_step_changes_little():
     b = m.simulate(NOMINAL, sweep(amplitude=5.0), GA)
     np.testing.assert_allclose(b.channels["Laser"], 10 * a.channels["Laser"],
                                atol=1e-6 * np.max(np.abs(b.channels["Laser"])))
+    assert a.meta["integrator"] == "GeneralizedAlpha" and a.meta["step"] == 1 / 8192
     half = m.simulate(NOMINAL, sweep(amplitude=0.5),
                       SolverSettings(method="GeneralizedAlpha", step=1 / 16384,
                                      auto_step=False))

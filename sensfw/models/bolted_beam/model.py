@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import ClassVar
 
 import numpy as np
@@ -248,6 +248,7 @@ class BoltedBeam(Model):
         with an explicit one and ``auto_step``, small enough for the fastest eigenvalues
         (:mod:`sensfw.models.stepsize`; ~1 us: slow, see the module docstring)."""
         if solver.method in simulation.IMPLICIT or not solver.auto_step:
-            return grid_step(solver.step, fs)
+            return replace(grid_step(solver.step, fs), method=solver.method)
         M, K, D = self.linear_matrices(p)
-        return explicit_step(first_order_eigenvalues(M, K, D), solver.step, fs)
+        return replace(explicit_step(first_order_eigenvalues(M, K, D), solver.step, fs),
+                       method=solver.method)
