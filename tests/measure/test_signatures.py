@@ -418,9 +418,10 @@ def test_contact_hardening_at_a_loaded_bearing_shifts_and_distorts_but_does_not_
     motion 0.02-0.06 um peak to peak at 0.03-0.1 N), and a preloaded power law with b > 1 is
     softening about its operating point (second-order frequency correction
     -(b-1)(2b+1)/48 (a/delta0)^2 of the backbone), asymmetric (even harmonics) and, with the
-    law rescaled to the same force at 0.1 um, stiffer at that point. No place of the model
-    gives hardening between 0.03 and 0.3 N (all eight contacts tried with exponents 1.12 and
-    2.0: the largest upward trend of the discrepancy was +0.11 %, the threshold 0.5 %);
+    law rescaled to the same force at 0.1 um, stiffer at that point. No contact of the model
+    gives hardening between 0.03 and 0.3 N (all eight tried with exponents 1.12 and
+    2.0: the largest upward trend of the discrepancy was +0.11 %, the threshold 0.5 %; a
+    contact closed from zero load does, ``test_a_contact_closed_from_zero_load_hardens``);
     above 0.3 N the model's own contacts lift off and its resonances are no longer clean
     modes. What shows: the 1.5 kHz mode 1.4 % above
     the model's at both levels and H2/H1 13 dB above the model's: amplitude independent and
