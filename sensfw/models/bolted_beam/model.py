@@ -205,24 +205,24 @@ class BoltedBeam(Model):
         n_out = excitation.n_samples
         scale = float(np.max(np.abs(excitation.force())))
         # Newton: modified (Jacobian kept while it converges: one iteration per step for the
-        # linear model) unless effects added bodies (light sliders stiffly tied by
-        # regularised friction: a stale Jacobian from the other side of a stick-slip
-        # transition never converged there, even at 1e-8 s steps); a modified-Newton failure
-        # is retried with full Newton
-        full = bool(self.assembly(p).added)
+        # linear model); where effects added bodies (light sliders stiffly tied by
+        # regularised friction, where a Jacobian from the other side of a stick-slip
+        # transition stalls Newton with Exudyn's defaults) modified with a patient renewal
+        # (simulation.PATIENT); a failure is retried with full Newton
+        newton = "patient" if self.assembly(p).added else "modified"
         while True:
             built = self.build(p, excitation, user_functions=user_functions,
                                step=choice.step)
             try:
                 channels = simulation.solve(built, excitation.fs, n_out, choice.substeps,
                                             solver.method, solver.spectral_radius, scale,
-                                            full_newton=full)
+                                            newton=newton)
                 break
             except exu.SolverError as exc:
-                if full or solver.method not in simulation.IMPLICIT:
+                if newton == "full" or solver.method not in simulation.IMPLICIT:
                     raise SimulationError(self.name, f"Exudyn solver error: {exc}",
                                           p) from None
-                full = True
+                newton = "full"
         if not channels:
             raise SimulationError(self.name, "Exudyn solver did not finish", p)
         for name, x in channels.items():
@@ -238,7 +238,7 @@ class BoltedBeam(Model):
                        units={"force": "N", **{c: self.units[c] for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
                              "method": solver.method,
-                             "newton": "full" if full else "modified", **choice.to_meta()},
+                             "newton": newton, **choice.to_meta()},
                        sweep_end=excitation.sweep_end)
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings
