@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from ..errors import SensfwError
 from .common import (
@@ -21,7 +20,6 @@ from .common import (
     _running,
     _user_errors,
     app,
-    console,
     out,
     say,
 )
@@ -148,8 +146,7 @@ def compare(
     for m in meas:
         for note in m.notes:
             if "not the study's" in note:
-                console.print(f"[yellow]notice:[/] {escape(f'{m.file}: {note}')}",
-                              highlight=False)
+                say(f"notice: {m.file}: {note}", style="yellow")
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_measurements(study, meas, runner)
     data = result.to_dict()

@@ -15,6 +15,20 @@ from .base import Effect
 from .contact import MM
 
 
+def add_spring_along_normal(hooks, place, name: str, force) -> None:
+    """A force element at a body ``place``, along its normal, measured from the static state
+    (it carries no static load): ``force(ops, e, e_dot)`` of the displacement ``e`` (m) and
+    velocity ``e_dot`` of the body point along the normal from where it rests (N)."""
+    nx, ny = place.normal
+
+    def law(ops, u, v):
+        f = force(ops, u[0] * nx + u[1] * ny, v[0] * nx + v[1] * ny)
+        return f * nx, f * ny
+
+    hooks.add_force(name, place.body0 or hooks.ground, place.r0, place.body1, place.r1, law,
+                    about_static=True)
+
+
 @effects.register("damping")
 class Damping(Effect):
     """Viscous damping across a contact or a joint (or from a body to the ground), in both
@@ -182,15 +196,9 @@ class LimitStop(Effect):
         k, gap = p["stop_stiffness"] / MM, p["stop_gap"] * MM
         if k <= 0:  # neutral: no stop
             return
-        nx, ny = place.normal
-
-        def law(ops, u, v):
-            e, e_dot = u[0] * nx + u[1] * ny, v[0] * nx + v[1] * ny
-            f = clearance_force(ops, e, e_dot, gap, k, 1.0, 0.0, 1.0)
-            return f * nx, f * ny
-
-        hooks.add_force(f"limit_stop@{place.name}", place.body0 or hooks.ground, place.r0,
-                        place.body1, place.r1, law, about_static=True)
+        add_spring_along_normal(
+            hooks, place, f"limit_stop@{place.name}",
+            lambda ops, e, e_dot: clearance_force(ops, e, e_dot, gap, k, 1.0, 0.0, 1.0))
 
     def probes(self, comparisons):
         """A twentieth of the largest stiffness at three gaps a factor 4 apart: a stop

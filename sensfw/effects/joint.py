@@ -21,6 +21,7 @@ from ..models.places import JointLaw
 from ..params import Parameter
 from ..plugins import effects
 from .base import Effect
+from .elements import add_spring_along_normal
 
 MM = 1e-3
 
@@ -176,7 +177,8 @@ class CubicStiffness(Effect):
         # shaft model's bodies move 0.06-0.2 um at 0.03-0.1 N: 3e10 lifts the crankshaft
         # rocking mode 0.1 % at 0.03 N and 0.9 % at 0.1 N (tests/measure/test_signatures.py)
         return [Parameter("cubic_stiffness", "N/mm^3", 1.0e8, 0.0, 1.0e12,
-                          "cubic coefficient of the joint's slip law", "Effect: "
+                          "cubic coefficient of the joint's slip law or of the spring "
+                          "at a body", "Effect: "
                           "cubic_stiffness")]
 
     def probes(self, comparisons):
@@ -191,15 +193,8 @@ class CubicStiffness(Effect):
         if place.kind == "joint":
             hooks.set_contact_law(place.name, WithCubic(hooks.contact_law(place.name), k3))
             return
-        nx, ny = place.normal
-
-        def law(ops, u, v):
-            e = u[0] * nx + u[1] * ny
-            f = -k3 * e * e * e
-            return f * nx, f * ny
-
-        hooks.add_force(f"cubic_stiffness@{place.name}", place.body0 or hooks.ground,
-                        place.r0, place.body1, place.r1, law, about_static=True)
+        add_spring_along_normal(hooks, place, f"cubic_stiffness@{place.name}",
+                                lambda ops, e, e_dot: -k3 * e * e * e)
 
 
 @dataclass(frozen=True)

@@ -132,10 +132,8 @@ def _calibrate_h0(ev: Evaluator, coords: Coordinates, start: Evaluation, budget:
     def evaluate(pts):
         return ev.evaluate(None, pts, "H0 calibration")
 
-    before = ev.n_simulations
     fine = calibrate(evaluate, coords, start, budget=budget, log=log)
-    per_point = max((ev.n_simulations - before) // max(len(fine.evaluations) - 1, 1), 1)
-    left = (budget - (ev.n_simulations - before)) // per_point
+    left = budget // ev.n_levels - (len(fine.evaluations) - 1)  # points left
     if left < 2 * len(coords) + 4:
         return fine
     log(f"H0 again with coarse differences ({H0_COARSE_STEP:g} of the coded range)")
