@@ -32,12 +32,12 @@ NEWTON_TOLERANCE = 1e-6
 NEWTON_ABSOLUTE = 1e-6
 #: modified Newton for the stick-slip sliders of joint effects (``newton="patient"``): the
 #: Jacobian (differentiated numerically, the cost of a step) is renewed only when an
-#: iteration contracts the residual by less than 0.9 (Exudyn's default 0.5). Measured on a
-#: 2 s sweep 84 -> 96 Hz through the second mode with micro_slip (joint 1e5 N/mm, sliders
-#: 1.6e6 N/mm, 700 N), 3 / 15 / 40 N: 2.1x / 1.9x faster than full Newton, the laser
-#: signals 3.1 / 2.5 / 2.5 % RMS apart, as far as full Newton is from itself at half the
-#: step (2.5 % at 15 N; patient Newton 1.8 % from that). Exudyn's default contractivity
-#: ended the run at a stick-slip transition ("SolveDynamic terminated").
+#: iteration contracts the residual by less than 0.9 (Exudyn's default 0.5).
+#: ``python bench/joint_newton.py`` (2 s sweep 84 -> 96 Hz through the second mode, micro_slip
+#: with joint 1e5 N/mm, sliders 1.6e6 N/mm, 700 N) at 3 / 15 N: 1.86x / 1.92x faster than full
+#: Newton, the laser signals 3.1 / 2.5 % RMS apart, as far as full Newton is from itself at
+#: half the step (3.1 / 2.5 %; patient Newton 2.1 / 1.8 % from that). Exudyn's default
+#: contractivity ended such a run at a stick-slip transition ("SolveDynamic terminated").
 PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12,
            "maxModifiedNewtonRestartIterations": 30}
 
