@@ -51,14 +51,16 @@ and its error estimate missed the contact impacts of the all-min corner of Table
 (a slide-bearing contact at its softest and most damped; the all-max corner, where it rejects
 28 % of its steps).
 
-Why the friction-velocity minimum still costs ~2.3x the nominal run (issue 15 asks for 2x;
-measured on the 1 s chirp, CPU time, against RK4 at 0.74 us): Exudyn's DOPRI5 evaluates the
-right-hand side 8 times per step (no first-same-as-last reuse; RK44 5, ODE23 5: counted with
-a Python user function), and its steps are held at the stability limit, so the cost is set
-by the stick band's eigenvalue, not the tolerance. ODE23 (Bogacki-Shampine) is cheaper per
-unit of stability but third order: at 5e-9 it runs at 1.85x with 1.2 dB RMS error over
-50-200 Hz (0.03 dB for DOPRI5 at 1e-9), at 1e-8 1.81x with 2.8 dB there, and it is within
-2x only at 3e-9 (1.99x). Storing every accepted step for the resampling costs 3 %.
+Why the friction-velocity minimum still costs ~2.3x the nominal run (issue 15 asks for 2x):
+Exudyn's DOPRI5 evaluates the right-hand side 7 times per step, ODE23 and RK44 4 (no
+first-same-as-last reuse; counted with a Python user function), and the adaptive steps sit
+at the stick band's stability limit, so the tolerance barely sets the cost.
+``python bench/integrators.py --duration 1.0 --cases v-min`` (CPU s per simulated s, FRF
+change against RK4 at 0.74 us): DOPRI5 at 1e-9 3.27 s, 0.028 dB (0.028 dB below 200 Hz);
+ODE23, third order, 2.54 s at 1e-8 but 1.28 dB below 200 Hz, 2.64 s at 5e-9 (0.76 dB there),
+2.72 s at 3e-9 (0.37 dB there), 3.18 s at 1e-9; the nominal run (RK4 at 10 us) took 1.38 s
+(``bench/model.py`` prints both runs' ratio). Under 2x only where the low band loses tenths
+of a dB to a dB, so DOPRI5 stays.
 """
 
 from __future__ import annotations
