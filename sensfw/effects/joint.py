@@ -38,12 +38,6 @@ def _decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
     return [{**nominal, name: top * f} for f in fractions]
 
 
-def _saturate(ops, v, v_reg):
-    """``v / sqrt(v^2 + v_reg^2)``: a smooth sign (Newton converges through stick-slip
-    transitions, which a kink of ``clip(v / v_reg)`` stalled)."""
-    return v * ops.pow(v * v + v_reg * v_reg, -0.5)
-
-
 @effects.register("micro_slip")
 class MicroSlip(Effect):
     """Micro-slip friction at a joint: a discrete Iwan model of Jenkins elements in parallel
@@ -51,29 +45,20 @@ class MicroSlip(Effect):
     pairs (``place.points``; its one pair ``r0``/``r1`` otherwise), sharing the parameters
     equally among them as the joint shares its law.
 
-    Each Jenkins element is a slider body (``slider_mass``, added at the point of
-    ``body0``) tied to ``body0`` by a spring ``k_i`` and rubbing on ``body1`` with the slip
-    force ``F_i``; per point ``elements`` of them with equal springs. Their slip
-    displacements ``phi_i = F_i / k_i`` follow a power-law density ``phi^chi`` on ``[0,
-    phi_max]`` (Segalman 2005; ``chi = microslip_exponent``, the elements are its
-    quantiles: ``chi < 0`` puts more of them at small slips, ``chi > 0`` near ``phi_max``),
-    scaled so that all the forces add up to ``microslip_force``, the force at which the whole
-    interface slips (friction coefficient x bolt preload), and the springs to
-    ``microslip_stiffness``.
-    Where bending makes the interface slip most (the ends of a lap joint's overlap), the
-    elements slip first: the joint softens from low levels on and more as the load grows,
-    and its damping grows with the load.
-
-    The slider is regularised: its friction is ``-F_i v / sqrt(v^2 + v_i^2)``, a viscous
-    element of slope ``F_i / v_i`` in the stick band. With ``v_i = eps omega_ref phi_i``
-    the stuck element is a Maxwell element whose relaxation frequency ``k_i v_i / F_i =
-    eps omega_ref`` lies 1.5 decades below ``omega_ref`` (2 pi 100 Hz): it acts as its
-    spring with a loss factor ``eps`` (0.03) there, a small addition to the damping of a
-    mode in proportion to the elements' share of its strain energy. A smaller ``eps``
-    sticks harder but stalls Newton at the stick-slip transitions (0.5 s of the sweep at 5 N
-    through the second mode: 2.3 s wall at eps = 0.01, 1.6 s at 0.03; the sharper
-    clip(v / v_i) stalled at eps = 0.001). The slider's mass (0.01 g) puts its own mode far
-    above the band.
+    Each Jenkins element is a spring ``k_i`` in series with a Coulomb slider of slip force
+    ``F_i`` between the two beams' points along the tangent (``hooks.add_jenkins``: the
+    model integrates the slider's position by return mapping, exact Coulomb friction with
+    no regularisation; the elements start stuck at the static state); per point
+    ``elements`` of them with equal springs. Their slip displacements ``phi_i = F_i / k_i``
+    follow a power-law density ``phi^chi`` on ``[0, phi_max]`` (Segalman 2005; ``chi =
+    microslip_exponent``, the elements are its quantiles: ``chi < 0`` puts more of them at
+    small slips, ``chi > 0`` near ``phi_max``), scaled so that all the forces add up to
+    ``microslip_force``, the force at which the whole interface slips (friction coefficient
+    x bolt preload), and the springs to ``microslip_stiffness``. Where bending makes the
+    interface slip most (the ends of a lap joint's overlap), the elements slip first: the
+    joint softens from low levels on and more as the load grows, and its damping grows with
+    the load (Masing's rule: a stuck element is lossless, a slipping one dissipates
+    ``4 F_i (a - phi_i)`` per cycle of slip amplitude ``a``).
     """
 
     name = "micro_slip"
@@ -83,9 +68,6 @@ class MicroSlip(Effect):
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
     elements: ClassVar[int] = 3  # per interface point
-    slider_mass: ClassVar[float] = 1e-5  # kg: 8 of them add 0.08 g to the joint (bolts 16 g)
-    eps: ClassVar[float] = 0.03
-    omega_ref: ClassVar[float] = 2 * np.pi * 100.0
     #: sliders that slip at zero force carry none: the joint's own law alone
     neutral: ClassVar[dict[str, float]] = {"microslip_force": 0.0}
 
@@ -119,25 +101,11 @@ class MicroSlip(Effect):
     def apply(self, place, hooks, p):
         if p["microslip_force"] <= 0:  # neutral: sliders that carry no force are absent
             return
-        tx, ty = place.tangent
         pairs = place.points or ((place.r0, place.r1),)
         for j, (r0, r1) in enumerate(pairs):
             for i, (k, force) in enumerate(self.jenkins(p, len(pairs))):
-                tag = f"{j + 1}.{i + 1}@{place.name}"
-                body = f"slider{tag}"
-                v_reg = self.eps * self.omega_ref * force / k
-                hooks.add_body(body, self.slider_mass, follows=(place.body0, r0))
-
-                def spring(ops, u, v, k=k):
-                    return -k * u[0], -k * u[1]
-
-                def slider(ops, u, v, force=force, v_reg=v_reg):
-                    # body1's point relative to the slider, along the tangent
-                    ft = -force * _saturate(ops, v[0] * tx + v[1] * ty, v_reg)
-                    return ft * tx, ft * ty
-
-                hooks.add_force(f"jenkins{tag}", place.body0, r0, body, (0.0, 0.0), spring)
-                hooks.add_force(f"slip{tag}", body, (0.0, 0.0), place.body1, r1, slider)
+                hooks.add_jenkins(f"jenkins{j + 1}.{i + 1}@{place.name}", place.body0, r0,
+                                  place.body1, r1, place.tangent, k, force)
 
 
 @dataclass(frozen=True)

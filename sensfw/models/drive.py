@@ -17,7 +17,7 @@ A voltage record drives a model through a gain (N/V), the study parameter
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
@@ -95,9 +95,10 @@ class LoadSignal:
         f = min(max(x - i, 0.0), 1.0)
         return float(tab[i] + f * (tab[i + 1] - tab[i]))
 
-    def install(self, mbs) -> list:
-        """Attach the pre-step function that sets the variables (sampled records only);
-        returns what must stay alive with ``mbs``."""
+    def install(self, mbs, before: Callable | None = None) -> list:
+        """Attach the pre-step function that sets the variables (sampled records only),
+        calling ``before`` (a pre-step function the system has already) first; returns what
+        must stay alive with ``mbs``."""
         if self.closed_form or self._vars is None:
             return []
         import exudyn as exu
@@ -106,6 +107,8 @@ class LoadSignal:
         start_of_step = exu.ConfigurationType.StartOfStep
 
         def prestep(mbs, t):
+            if before is not None:
+                before(mbs, t)
             # Exudyn calls it before each step with the step's END time; the step starts at
             # the start-of-step configuration's time (adaptive steps vary, checked in
             # tests/models/test_drive.py)

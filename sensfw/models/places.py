@@ -133,6 +133,15 @@ class Hooks(Protocol):
         no force (the static state is solved without it)."""
         ...
 
+    def add_jenkins(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                    direction: Point, stiffness: float, slip_force: float) -> None:
+        """Add a Jenkins element along ``direction`` between a point of ``body0`` and a point
+        of ``body1``: a spring ``stiffness`` (N/m) in series with a Coulomb slider that slips
+        at ``slip_force`` (N), stuck at the static state. Its slider position is a state the
+        integrator updates after every step (no regularisation); models that cannot raise
+        :class:`~sensfw.errors.SensfwError`."""
+        ...
+
     def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
         """Add a point mass that starts where the point ``follows = (body, r)`` is."""
         ...

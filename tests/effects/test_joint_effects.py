@@ -159,7 +159,79 @@ def test_micro_slip_is_an_iwan_model_whose_elements_add_up_to_its_parameters():
     assert slips == sorted(slips) and slips[0] > 0
     model = BoltedBeam(effects=["micro_slip"])
     asm = model.assembly(full(model))
-    assert len(asm.added) == 4 * eff.elements  # a slider per element and interface point
+    jenkins = [ln for ln in asm.links if ln.jenkins is not None]
+    assert len(jenkins) == 4 * eff.elements and not asm.added  # elements, no slider bodies
+
+
+def test_jenkins_return_mapping_traces_the_masing_loop():
+    """The slider update (backward-Euler return mapping) under an imposed slip ``a sin``:
+    the element's force is bounded by its slip force, the loop it traces encloses ``4 F (a -
+    F / k)`` per cycle once ``a > F / k`` (a spring in series with a Coulomb slider: Masing's
+    rule; Segalman 2005, Eq. 4) and none below, where it is the spring alone."""
+    from sensfw.models.bolted_beam.simulation import JenkinsSliders
+    from sensfw.models.planar import Link
+
+    k, force = 2.0e6, 30.0  # N/m, N: slips beyond phi = 15 um
+    ln = Link("j", "a", (0.0, 0.0), "b", (0.0, 0.0), None, about_static=True,
+              offset=(0.0, 0.0), jenkins=(k, force, (1.0, 0.0)))
+    for a in (0.5 * force / k, 2.0 * force / k, 10.0 * force / k):
+        sl_ = JenkinsSliders([ln], "python")
+        sl_.attach(None, lambda body, r, axis: {"a": 0, "b": 1}[body])
+        t = np.linspace(0.0, 3.0, 30001)
+        s = a * np.sin(2 * np.pi * t)
+        f = []
+        for si in s:
+            sl_.update(np.array([0.0, si]))
+            f.append(k * (si - sl_.x[0]))  # the spring's force after the step
+        f = np.array(f)
+        assert np.max(np.abs(f)) <= force * (1 + 1e-12)
+        last = t >= 2.0  # a settled cycle
+        area = abs(np.trapezoid(f[last], s[last]))
+        expect = 4 * force * (a - force / k) if a > force / k else 0.0
+        assert area == pytest.approx(expect, rel=2e-3, abs=1e-9 * force * a)
+
+
+def _sampled(seconds=0.5, level=10.0):
+    from sensfw.excitation import SampledForce
+
+    sweep = LinearSweep(88.0, 94.0, seconds, 1024.0, level)
+    return SampledForce(samples=sweep.force(), fs=1024.0, amplitude=level)
+
+
+def test_jenkins_sliders_are_the_same_with_symbolic_and_python_user_functions():
+    """The slider positions reach the C++-evaluated symbolic laws through named variables
+    set before each step, and the Python laws through an array: the two runs agree to the
+    Newton tolerance (1e-6 relative; measured 5e-8), with a sampled excitation (whose own
+    pre-step function must call the sliders' first), while the elements slip (the run
+    differs from all stuck and from the same run at a tenth of the level scaled up)."""
+    model = BoltedBeam(effects=["micro_slip"])
+    p = full(model, joint_stiffness=2e4, microslip_stiffness=1e5, microslip_force=200.0)
+    ex = _sampled()
+    sym = model.simulate(p, ex, GA).channels["Laser"]
+    py = model.simulate(p, ex, GA, user_functions="python").channels["Laser"]
+    assert np.max(np.abs(sym - py)) < 1e-6 * np.max(np.abs(sym))
+    stuck = model.simulate({**p, "microslip_force": 20000.0}, ex, GA).channels["Laser"]
+    small = model.simulate(p, _sampled(level=1.0), GA).channels["Laser"]
+    assert np.sqrt(np.mean((sym - stuck) ** 2)) > 0.05 * np.sqrt(np.mean(stuck**2))
+    assert np.sqrt(np.mean((sym - 10 * small) ** 2)) > 0.05 * np.sqrt(np.mean(sym**2))
+
+
+def test_stuck_jenkins_elements_are_their_springs(monkeypatch):
+    """Elements that never reach their slip force are springs: the run equals the same
+    model whose elements are replaced by their springs (the stuck law statics and
+    linearisation use), to the Newton tolerance; and its second mode is the linear model's
+    whose joint stiffness is the joint's plus the elements'."""
+    from sensfw.models.bolted_beam.simulation import JenkinsSliders
+
+    model = BoltedBeam(effects=["micro_slip"])
+    p = full(model, joint_stiffness=2e4, microslip_stiffness=1e5, microslip_force=20000.0)
+    stiffer = {**own(p), "joint_stiffness": 2e4 + 1e5}
+    assert second_mode(model, p) == pytest.approx(second_mode(BoltedBeam(), stiffer), rel=1e-9)
+    ex = _sampled(level=0.1)  # the interface carries ~10 N: every element sticks
+    run = model.simulate(p, ex, GA).channels["Laser"]
+    monkeypatch.setattr(JenkinsSliders, "law", lambda self, i: self.links[i].law)
+    springs = model.simulate(p, ex, GA).channels["Laser"]
+    assert np.max(np.abs(run - springs)) < 1e-5 * np.max(np.abs(springs))
 
 
 def resonance(model, p, amplitude):

@@ -16,7 +16,7 @@ Reduced coordinate vector ``z = [points (u, w) ..., modal eta ..., added bodies 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -88,6 +88,24 @@ class BeamAssembly:
         self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
                                lambda ops, u, v, contact: law(ops, u, v),
                                about_static=about_static))
+
+    def add_jenkins(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                    direction: Point, stiffness: float, slip_force: float) -> None:
+        d = tuple(float(c) for c in direction)
+        if d not in ((1.0, 0.0), (0.0, 1.0)):
+            raise SensfwError(f"Jenkins element {name!r}: direction {direction} must be a "
+                              "coordinate axis, (1, 0) or (0, 1)")
+        if not (stiffness > 0 and slip_force > 0):
+            raise SensfwError(f"Jenkins element {name!r} needs a positive stiffness and slip "
+                              f"force, got {stiffness:g} N/m, {slip_force:g} N")
+        k = float(stiffness)
+
+        def stuck(ops, u, v):
+            s = u[0] * d[0] + u[1] * d[1]
+            return -k * s * d[0], -k * s * d[1]
+
+        self.add_force(name, body0, r0, body1, r1, stuck, about_static=True)
+        self.links[-1] = replace(self.links[-1], jenkins=(k, float(slip_force), d))
 
     def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
         body, r = follows

@@ -188,7 +188,7 @@ class BoltedBeam(Model):
                    for name, (body, x) in mechanics.sensor_points(g).items()]
         built = simulation.build(st, z0, D, contact, ops, loads, sensors, user_functions)
         if signal is not None:
-            built.keep += signal.install(built.mbs)
+            built.keep += signal.install(built.mbs, before=built.prestep)
         return built
 
     def simulate(self, params: Mapping[str, float], excitation: Excitation,
@@ -205,10 +205,9 @@ class BoltedBeam(Model):
         n_out = excitation.n_samples
         scale = float(np.max(np.abs(excitation.force())))
         # Newton: modified (Jacobian kept while it converges: one iteration per step for the
-        # linear model); where effects added bodies (light sliders stiffly tied by
-        # regularised friction, where a Jacobian from the other side of a stick-slip
-        # transition stalls Newton with Exudyn's defaults) modified with a patient renewal
-        # (simulation.PATIENT); a failure is retried with full Newton
+        # linear model; Jenkins elements switch between stick and slip inside it, where a
+        # contraction below 0.5 renews the Jacobian); where effects added bodies, modified
+        # with a patient renewal (simulation.PATIENT); a failure is retried with full Newton
         newton = "patient" if self.assembly(p).added else "modified"
         while True:
             built = self.build(p, excitation, user_functions=user_functions,

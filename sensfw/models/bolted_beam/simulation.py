@@ -16,7 +16,9 @@ step, or an explicit Runge-Kutta method (see :class:`~.model.BoltedBeam` for why
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -30,14 +32,13 @@ NEWTON_TOLERANCE = 1e-6
 #: absolute residual (N, RMS per coordinate) at which Newton stops, per N of the largest
 #: excitation force (see :func:`solve`)
 NEWTON_ABSOLUTE = 1e-6
-#: modified Newton for the stick-slip sliders of joint effects (``newton="patient"``): the
-#: Jacobian (differentiated numerically, the cost of a step) is renewed only when an
-#: iteration contracts the residual by less than 0.9 (Exudyn's default 0.5).
-#: ``python bench/joint_newton.py`` (2 s sweep 84 -> 96 Hz through the second mode, micro_slip
-#: with joint 1e5 N/mm, sliders 1.6e6 N/mm, 700 N) at 3 / 15 N: 1.86x / 1.92x faster than full
-#: Newton, the laser signals 3.1 / 2.5 % RMS apart, as far as full Newton is from itself at
-#: half the step (3.1 / 2.5 %; patient Newton 2.1 / 1.8 % from that). Exudyn's default
-#: contractivity ended such a run at a stick-slip transition ("SolveDynamic terminated").
+#: modified Newton for bodies that effects add (``newton="patient"``): the Jacobian
+#: (differentiated numerically, the cost of a step) is renewed only when an iteration
+#: contracts the residual by less than 0.9 (Exudyn's default 0.5). Measured when micro_slip's
+#: Jenkins elements were light slider bodies with regularised friction (before
+#: :class:`JenkinsSliders`; 2 s sweep through the second mode at 3 / 15 N): 1.86x / 1.92x
+#: faster than full Newton with signals as far apart as full Newton from itself at half the
+#: step; Exudyn's default contractivity ended such runs at stick-slip transitions.
 PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12,
            "maxModifiedNewtonRestartIterations": 30}
 
@@ -93,7 +94,11 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
         return mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[key]))
 
     keep: list = []
+    jenkins = [ln for ln in a.links if ln.jenkins is not None]
+    sliders = JenkinsSliders(jenkins, user_functions) if jenkins else None
     for ln in a.links:
+        if ln.jenkins is not None:
+            ln = replace(ln, law=sliders.law(jenkins.index(ln)))
         m0, m1 = marker(ln.body0, ln.r0), marker(ln.body1, ln.r1)
         # reference offset between the two points, removed inside the law
         p0 = (0.0, 0.0) if ln.body0 == a.ground else structure.reference(ln.body0, ln.r0)
@@ -123,7 +128,98 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
             outputVariableType=getattr(exu.OutputVariableType, quantity)))
         handles[name] = (s, comp)
     mbs.Assemble()
-    return Built(SC=SC, mbs=mbs, sensors=handles, q0=z0, keep=keep)
+    built = Built(SC=SC, mbs=mbs, sensors=handles, q0=z0, keep=keep)
+    if sliders is not None:
+        def coordinate_index(body, r, axis):
+            if body == a.ground:
+                return None
+            key = body if body in structure.body_index else f"{body}@{round(float(r[0]), 9)!r}"
+            return mbs.GetNodeODE2Index(nodes[key]) + axis
+
+        sliders.attach(mbs, coordinate_index)
+        built.prestep = sliders.prestep()
+        mbs.SetPreStepUserFunction(built.prestep)
+        keep += [sliders, built.prestep]
+    return built
+
+
+class JenkinsSliders:
+    """The slider positions of an assembly's Jenkins elements
+    (:meth:`~.assembly.BeamAssembly.add_jenkins`), integrated by return mapping (Simo &
+    Hughes 1998, Sect. 1.4, the elastic predictor / plastic corrector of 1D plasticity).
+
+    Each element is a force element whose law is ``F(s) = clip(k (s - x), -F_s, F_s)`` of
+    its slip ``s`` along its direction (from the static state), with the slider position
+    ``x`` frozen during a step: inside the implicit step this is exactly the return-mapped
+    force of the step's end state (backward Euler of the slider, no regularisation, no slider
+    body), and after the step has converged (Exudyn's pre-step function of the next one)
+    ``x <- s - F(s) / k``. ``x`` is a named symbolic variable for symbolic user functions
+    (set between steps, read in C++) or an array entry for Python ones. All elements start
+    stuck at the static state (``x = 0``).
+    """
+
+    def __init__(self, links, kind: str):
+        import exudyn as exu
+
+        self.links = list(links)
+        n = len(self.links)
+        self.k = np.array([ln.jenkins[0] for ln in self.links])
+        self.force = np.array([ln.jenkins[1] for ln in self.links])
+        self.x = np.zeros(n)
+        serial = next(_serial)
+        self.vars = ([exu.symbolic.Real(f"sensfw_jenkins_{serial}_{i}", 0.0) for i in range(n)]
+                     if kind == "symbolic" else None)
+        self.index0 = self.index1 = self.rest = None
+
+    def law(self, i: int):
+        """The force law of element ``i`` (a :class:`~sensfw.models.planar.Link` law)."""
+        k, force = float(self.k[i]), float(self.force[i])
+        d = self.links[i].jenkins[2]
+        var = self.vars[i] if self.vars is not None else None
+        x = self.x
+
+        def jenkins(ops, u, v, contact):
+            s = u[0] * d[0] + u[1] * d[1]
+            slip = var if var is not None else float(x[i])
+            f = ops.max(ops.min(k * (s - slip), force), -force)
+            return -f * d[0], -f * d[1]
+
+        return jenkins
+
+    def attach(self, mbs, coordinate_index) -> None:
+        """Read the elements' slips from the system's coordinates (after ``Assemble``):
+        ``coordinate_index(body, r, axis)`` is the global ODE2 index of a point's coordinate
+        (``None`` on the ground)."""
+        def idx(body, r, ln):
+            axis = 0 if ln.jenkins[2] == (1.0, 0.0) else 1
+            i = coordinate_index(body, r, axis)
+            return -1 if i is None else i
+
+        self.index0 = np.array([idx(ln.body0, ln.r0, ln) for ln in self.links])
+        self.index1 = np.array([idx(ln.body1, ln.r1, ln) for ln in self.links])
+        self.rest = np.array([(ln.offset or (0.0, 0.0))[0 if ln.jenkins[2] == (1.0, 0.0)
+                                                         else 1] for ln in self.links])
+
+    def update(self, q: np.ndarray) -> None:
+        """The return mapping at the converged state ``q`` (global ODE2 coordinates)."""
+        qe = np.append(np.asarray(q, float), 0.0)  # index -1: the ground
+        s = qe[self.index1] - qe[self.index0] - self.rest
+        f = np.clip(self.k * (s - self.x), -self.force, self.force)
+        self.x[:] = s - f / self.k
+        if self.vars is not None:
+            for var, value in zip(self.vars, self.x, strict=True):
+                var.SetValue(float(value))
+
+    def prestep(self):
+        """Exudyn's pre-step function: the return mapping of the last converged step."""
+        def prestep(mbs, t):
+            self.update(mbs.systemData.GetODE2Coordinates())
+            return True
+
+        return prestep
+
+
+_serial = itertools.count()
 
 
 def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,

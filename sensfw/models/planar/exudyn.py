@@ -32,6 +32,8 @@ class Built:
     sensors: dict[str, tuple[object, int]]
     q0: np.ndarray
     keep: list = field(default_factory=list)  # symbolic expression trees must outlive mbs
+    #: the pre-step function the system already has (a later one must call it first)
+    prestep: Callable | None = None
 
 
 def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpec] = (),

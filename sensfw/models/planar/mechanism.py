@@ -59,6 +59,11 @@ class Link:
     #: without it and ``offset`` (its ``u`` there) is set by :meth:`Mechanism.anchor`
     about_static: bool = False
     offset: Point | None = None
+    #: a Jenkins element ``(stiffness N/m, slip force N, direction)`` (see
+    #: :meth:`~sensfw.models.places.Hooks.add_jenkins`): ``law`` is then its stuck spring,
+    #: what statics and linearisation see; a model that integrates it builds the hysteretic
+    #: element itself
+    jenkins: tuple[float, float, Point] | None = None
 
 
 def anchored(links: list[Link], displacement: Callable | None) -> list[Link]:
@@ -199,6 +204,12 @@ class Mechanism:
         self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
                                lambda ops, u, v, contact: law(ops, u, v),
                                about_static=about_static))
+
+    def add_jenkins(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                    direction: Point, stiffness: float, slip_force: float) -> None:
+        raise SensfwError(f"{type(self).__name__} has no Jenkins elements (a spring in series "
+                          f"with a Coulomb slider, {name!r}): only models whose integrator "
+                          "tracks the slider's state offer them (bolted_beam)")
 
     def add_body(self, name: str, mass: float, follows: tuple[str, Point]) -> None:
         if any(b.name == name for b in self.bodies) or name == self.ground:
