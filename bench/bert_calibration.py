@@ -245,7 +245,7 @@ def main() -> None:
 #: the levels the effect is calibrated on; the other three are predicted
 FIT_LEVELS = (0.05, 0.15, 0.30)
 EFFECT = [{"name": "micro_slip", "attach": "joint"}]
-MICRO_NAMES = ("joint_stiffness", "microslip_stiffness", "microslip_force",
+MICRO_NAMES = ("joint_stiffness", "microslip_residual", "microslip_force",
                "microslip_exponent")
 #: per level: the resonance within ~this (Hz) and the peak magnitude within ~this (log)
 FN_SCALE, PEAK_SCALE = 0.1, 0.05
@@ -269,16 +269,12 @@ def calibrate_microslip(study: Study, meas, runner, linear: dict) -> tuple[dict,
 
     declared = model_with_effects(study, EFFECT).parameters()
     measured = [mode_fit(*laser_frf(m.signals)) for m in meas]
-    # start: the joint alone as soft as the linear model must be at 0.30 V, the interface
-    # stuck as stiff as the linear model at 0.05 V, slipping fully at ~0.3 V (at 6000 N it
-    # hardly slipped there: -0.3 Hz)
-    start = {"joint_stiffness": 1.3e5, "microslip_stiffness": 1e6, "microslip_force": 2000.0,
+    # start: the interface stuck as stiff as the linear model at 0.05 V, what is left when
+    # it slips as soft as the linear model must be at 0.30 V, slipping fully at ~0.3 V (at
+    # 6000 N it hardly slipped there: -0.3 Hz)
+    start = {"joint_stiffness": 1.13e6, "microslip_residual": 0.115, "microslip_force": 2000.0,
              "microslip_exponent": 0.0}
-    # a log axis cannot hold the neutral 0 of microslip_force: it starts at 1e-3 of the top
-    # of the range (20 N, about the old lower bound of 10 N)
-    lo = np.array([scale(n, declared[n].min if declared[n].min > 0 or
-                         n == "microslip_exponent" else 1e-3 * declared[n].max)
-                   for n in MICRO_NAMES])
+    lo = np.array([scale(n, declared[n].min) for n in MICRO_NAMES])
     hi = np.array([scale(n, declared[n].max) for n in MICRO_NAMES])
     evals = []
 

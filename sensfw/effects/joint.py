@@ -17,6 +17,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..errors import SensfwError
 from ..models.places import JointLaw
 from ..params import Parameter
 from ..plugins import effects
@@ -38,12 +39,44 @@ def _decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
     return [{**nominal, name: top * f} for f in fractions]
 
 
+@dataclass(frozen=True)
+class WithResidual:
+    """A joint law whose tangential force is scaled by ``residual`` (what remains of the
+    joint's own stiffness and damping where micro-slip's elements took the rest)."""
+
+    base: JointLaw
+    residual: float
+
+    def tangential(self, ops, s, s_dot):
+        return self.residual * self.base.tangential(ops, s, s_dot)
+
+    def normal(self, ops, g, g_dot):
+        return self.base.normal(ops, g, g_dot)
+
+
+def tangential_stiffness(law: JointLaw, h: float = 1e-9) -> float:
+    """``-dF_t/ds`` of a joint law at zero slip (N/m; central difference)."""
+    from ..models.contact import numpy_ops
+
+    ops = numpy_ops()
+    return float(-(law.tangential(ops, h, 0.0) - law.tangential(ops, -h, 0.0)) / (2 * h))
+
+
 @effects.register("micro_slip")
 class MicroSlip(Effect):
     """Micro-slip friction at a joint: a discrete Iwan model of Jenkins elements in parallel
-    with the joint's own law, along the joint's tangent, at each of its interface point
-    pairs (``place.points``; its one pair ``r0``/``r1`` otherwise), sharing the parameters
-    equally among them as the joint shares its law.
+    with what remains of the joint's own law, along the joint's tangent, at each of its
+    interface point pairs (``place.points``; its one pair ``r0``/``r1`` otherwise), sharing
+    the parameters equally among them as the joint shares its law.
+
+    The joint's stiffness (its law's ``k_t`` at zero slip: the stuck interface, what a linear
+    model calibrates at a low level) is split: ``microslip_residual`` of it stays in the
+    joint's law (the interface's part that never slips: the bolts' shanks, the centre under
+    the heads), the rest goes into the Jenkins elements, which lose it as they slip. So the
+    effect changes nothing where the interface sticks, and a fully slipped joint keeps
+    ``microslip_residual`` of its stiffness (Segalman's four-parameter Iwan model with a
+    residual stiffness; Brake 2018, Ch. 10). ``microslip_residual = 1`` is the joint without
+    the effect.
 
     Each Jenkins element is a spring ``k_i`` in series with a Coulomb slider of slip force
     ``F_i`` between the two beams' points along the tangent (``hooks.add_jenkins``: the
@@ -54,11 +87,10 @@ class MicroSlip(Effect):
     microslip_exponent``, the elements are its quantiles: ``chi < 0`` puts more of them at
     small slips, ``chi > 0`` near ``phi_max``), scaled so that all the forces add up to
     ``microslip_force``, the force at which the whole interface slips (friction coefficient
-    x bolt preload), and the springs to ``microslip_stiffness``. Where bending makes the
-    interface slip most (the ends of a lap joint's overlap), the elements slip first: the
-    joint softens from low levels on and more as the load grows, and its damping grows with
-    the load (Masing's rule: a stuck element is lossless, a slipping one dissipates
-    ``4 F_i (a - phi_i)`` per cycle of slip amplitude ``a``).
+    x bolt preload). Where bending makes the interface slip most, the elements slip first:
+    the joint softens from low levels on and more as the load grows, and dissipates
+    (Masing's rule: a stuck element is lossless, a slipping one dissipates ``4 F_i (a -
+    phi_i)`` per cycle of slip amplitude ``a``).
     """
 
     name = "micro_slip"
@@ -68,42 +100,51 @@ class MicroSlip(Effect):
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
     elements: ClassVar[int] = 3  # per interface point
-    #: sliders that slip at zero force carry none: the joint's own law alone
-    neutral: ClassVar[dict[str, float]] = {"microslip_force": 0.0}
+    #: the joint keeps all its stiffness: no elements
+    neutral: ClassVar[dict[str, float]] = {"microslip_residual": 1.0}
 
     def parameters(self):
-        # ranges from the UNESP-BERT beam: the joint's stiffness at 0.05 V calibrates to
-        # ~1e6 N/mm; two M6 bolts at 5 Nm (~4 kN preload each) with mu 0.2-0.6 slip at
-        # 1.6-5 kN, and the range leaves room on either side (down to the neutral 0)
-        return [Parameter("microslip_stiffness", "N/mm", 5.0e5, 1.0e4, 2.0e6,
-                          "tangential stiffness of the joint's slipping interface (all "
-                          "Jenkins elements)", "Effect: micro_slip"),
-                Parameter("microslip_force", "N", 2000.0, 0.0, 20000.0,
+        # ranges from the UNESP-BERT beam: two M6 bolts at 5 Nm (~4 kN preload each) with
+        # mu 0.2-0.6 slip at 1.6-5 kN, and the range leaves a decade on either side; the
+        # linear model at 0.30 V wants the joint ~50x softer than at 0.05 V
+        return [Parameter("microslip_residual", "", 0.1, 0.001, 1.0,
+                          "fraction of the joint's tangential stiffness left when its "
+                          "interface slips completely (1: no micro-slip)",
+                          "Effect: micro_slip"),
+                Parameter("microslip_force", "N", 2000.0, 20.0, 20000.0,
                           "force at which the whole interface slips (friction coefficient "
                           "x bolt preload)", "Effect: micro_slip"),
                 Parameter("microslip_exponent", "", -0.5, -0.9, 2.0,
                           "exponent chi of the slip-displacement density phi^chi (Segalman)",
                           "Effect: micro_slip")]
 
-    def jenkins(self, p, points: int = 1) -> list[tuple[float, float]]:
-        """``(k_i, F_i)`` (N/m, N) of the elements at one of ``points`` interface points."""
+    def jenkins(self, p, stiffness: float, points: int = 1) -> list[tuple[float, float]]:
+        """``(k_i, F_i)`` (N/m, N) of the elements at one of ``points`` interface points of a
+        joint whose tangential stiffness is ``stiffness`` (N/m)."""
         n = self.elements
-        k = p["microslip_stiffness"] / MM / (n * points)
+        k = (1.0 - p["microslip_residual"]) * stiffness / (n * points)
         q = ((np.arange(n) + 0.5) / n) ** (1.0 / (1.0 + p["microslip_exponent"]))
         phi = q * p["microslip_force"] / points / (k * q.sum())
         return [(k, float(k * f)) for f in phi]
 
     def probes(self, comparisons):
-        """The macro-slip force at 200 N, 2 kN and 20 kN (the elements slip at the
-        measured levels at the lower ones and stick at the higher), the rest nominal."""
+        """The macro-slip force at 200 N, 2 kN and 20 kN with a tenth of the joint's
+        stiffness left (the elements slip at the measured levels at the lower forces and
+        stick at the higher), the rest nominal."""
         return _decade_probes(self, "microslip_force")
 
     def apply(self, place, hooks, p):
-        if p["microslip_force"] <= 0:  # neutral: sliders that carry no force are absent
+        if p["microslip_residual"] >= 1.0:  # neutral: the joint's own law, untouched
             return
+        law = hooks.contact_law(place.name)
+        stiffness = tangential_stiffness(law)
+        if not stiffness > 0:
+            raise SensfwError(f"micro_slip at {place.name!r}: the joint's law has no "
+                              f"tangential stiffness to split ({stiffness:g} N/m)")
+        hooks.set_contact_law(place.name, WithResidual(law, p["microslip_residual"]))
         pairs = place.points or ((place.r0, place.r1),)
         for j, (r0, r1) in enumerate(pairs):
-            for i, (k, force) in enumerate(self.jenkins(p, len(pairs))):
+            for i, (k, force) in enumerate(self.jenkins(p, stiffness, len(pairs))):
                 hooks.add_jenkins(f"jenkins{j + 1}.{i + 1}@{place.name}", place.body0, r0,
                                   place.body1, r1, place.tangent, k, force)
 

@@ -151,11 +151,11 @@ def test_micro_slip_is_an_iwan_model_whose_elements_add_up_to_its_parameters():
     from sensfw.effects.joint import MicroSlip
 
     eff = MicroSlip()
-    p = {"microslip_stiffness": 1e5, "microslip_force": 400.0, "microslip_exponent": -0.5}
-    parts = [kf for _ in range(4) for kf in eff.jenkins(p, 4)]
-    assert sum(k for k, _ in parts) == pytest.approx(1e8)  # N/m
+    p = {"microslip_residual": 0.2, "microslip_force": 400.0, "microslip_exponent": -0.5}
+    parts = [kf for _ in range(4) for kf in eff.jenkins(p, 1.25e8, 4)]
+    assert sum(k for k, _ in parts) == pytest.approx(1e8)  # N/m: 80 % of the joint's
     assert sum(f for _, f in parts) == pytest.approx(400.0)
-    slips = [f / k for k, f in eff.jenkins(p, 4)]
+    slips = [f / k for k, f in eff.jenkins(p, 1.25e8, 4)]
     assert slips == sorted(slips) and slips[0] > 0
     model = BoltedBeam(effects=["micro_slip"])
     asm = model.assembly(full(model))
@@ -205,7 +205,7 @@ def test_jenkins_sliders_are_the_same_with_symbolic_and_python_user_functions():
     pre-step function must call the sliders' first), while the elements slip (the run
     differs from all stuck and from the same run at a tenth of the level scaled up)."""
     model = BoltedBeam(effects=["micro_slip"])
-    p = full(model, joint_stiffness=2e4, microslip_stiffness=1e5, microslip_force=200.0)
+    p = full(model, joint_stiffness=1.2e5, microslip_residual=1 / 6, microslip_force=200.0)
     ex = _sampled()
     sym = model.simulate(p, ex, GA).channels["Laser"]
     py = model.simulate(p, ex, GA, user_functions="python").channels["Laser"]
@@ -219,14 +219,14 @@ def test_jenkins_sliders_are_the_same_with_symbolic_and_python_user_functions():
 def test_stuck_jenkins_elements_are_their_springs(monkeypatch):
     """Elements that never reach their slip force are springs: the run equals the same
     model whose elements are replaced by their springs (the stuck law statics and
-    linearisation use), to the Newton tolerance; and its second mode is the linear model's
-    whose joint stiffness is the joint's plus the elements'."""
+    linearisation use), to the Newton tolerance; and its second mode is the linear
+    model's: the elements and what is left of the joint add up to the joint's stiffness."""
     from sensfw.models.bolted_beam.simulation import JenkinsSliders
 
     model = BoltedBeam(effects=["micro_slip"])
-    p = full(model, joint_stiffness=2e4, microslip_stiffness=1e5, microslip_force=20000.0)
-    stiffer = {**own(p), "joint_stiffness": 2e4 + 1e5}
-    assert second_mode(model, p) == pytest.approx(second_mode(BoltedBeam(), stiffer), rel=1e-9)
+    p = full(model, joint_stiffness=1.2e5, microslip_residual=1 / 6,
+             microslip_force=20000.0)
+    assert second_mode(model, p) == pytest.approx(second_mode(BoltedBeam(), own(p)), rel=1e-9)
     ex = _sampled(level=0.1)  # the interface carries ~10 N: every element sticks
     run = model.simulate(p, ex, GA).channels["Laser"]
     monkeypatch.setattr(JenkinsSliders, "law", lambda self, i: self.links[i].law)
@@ -250,11 +250,11 @@ def resonance(model, p, amplitude):
 @pytest.mark.slow
 def test_micro_slip_softens_and_damps_the_joint_as_the_level_rises():
     model = BoltedBeam(effects=["micro_slip"])
-    p = full(model, joint_stiffness=2e4, microslip_stiffness=1e5, microslip_force=500.0)
+    p = full(model, joint_stiffness=1.2e5, microslip_residual=1 / 6, microslip_force=500.0)
     low, high = resonance(model, p, 0.1), resonance(model, p, 10.0)
-    # at 0.1 N every element sticks: the linear model with the Iwan springs added to the
-    # joint (within the 1/4 Hz grid's interpolation error)
-    stuck = BoltedBeam().eigenfrequencies({**own(p), "joint_stiffness": 2e4 + 1e5}, 2)[1]
+    # at 0.1 N every element sticks: the linear model, whose joint stiffness the residual
+    # and the Iwan springs share (within the 1/4 Hz grid's interpolation error)
+    stuck = BoltedBeam().eigenfrequencies(own(p), 2)[1]
     assert abs(low[0] - stuck) < 0.15, (low, stuck)
     assert high[0] < low[0] - 0.5, (low, high)  # softening
     assert high[1] < 0.7 * low[1], (low, high)  # more damping: a lower peak per N

@@ -82,9 +82,11 @@ def test_the_linear_model_fails_more_as_the_level_rises(linear):
     assert np.all(np.diff(model - meas) > 0), model - meas
 
 
-def test_micro_slip_has_a_lever_only_on_a_soft_joint():
-    """Why ``augment`` with micro_slip@joint from the linear calibration finds no lever
-    (README): the linearised model's second bending mode against the joint's stiffness."""
+def test_micro_slip_has_a_lever_from_the_calibrated_joint():
+    """micro_slip splits the joint's calibrated stiffness between what stays (``residual``)
+    and Jenkins elements that lose it as they slip, so it acts from wherever a linear
+    calibration put the joint (README). Its lever, on the linearised model's second bending
+    mode: from all stuck (the joint as calibrated) to all slipping."""
     model = BoltedBeam()
 
     def mode2(values, **kw):
@@ -95,7 +97,8 @@ def test_micro_slip_has_a_lever_only_on_a_soft_joint():
     # joint must soften from ~1e6 to ~1.5e5 N/mm for a fall of that size
     assert 3.5 < mode2(LINEAR, joint_stiffness=1e6) - mode2(LINEAR, joint_stiffness=1.5e5) < 4.5
     # where augment's base recalibration left the joint (5.7e6 N/mm, the clamp softened
-    # instead), Jenkins elements in parallel, from all slipping (the joint alone) to all
-    # stuck (+2e6 N/mm, the top of microslip_stiffness), move the mode by less than 0.1 Hz
-    stuck = AUGMENT_BASE["joint_stiffness"] + 2e6
-    assert 0 < mode2(AUGMENT_BASE, joint_stiffness=min(stuck, 1e7)) - mode2(AUGMENT_BASE) < 0.1
+    # instead): a tenth of it left when all elements slip (the effect's nominal residual)
+    # moves the mode by half the measured fall, 3 % by more than all of it
+    k = AUGMENT_BASE["joint_stiffness"]
+    assert 2.0 < mode2(AUGMENT_BASE) - mode2(AUGMENT_BASE, joint_stiffness=0.1 * k) < 2.5
+    assert mode2(AUGMENT_BASE) - mode2(AUGMENT_BASE, joint_stiffness=0.03 * k) > 4.4
