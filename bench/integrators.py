@@ -12,7 +12,8 @@ Candidates: RK4 at the fixed step of the linearisation (``|lambda| h <= 0.6``; t
 default) and at larger fixed steps; DOPRI5 and ODE23 with error control (sensor values
 resampled onto the sample grid, ``sensfw.models.integration``); the implicit trapezoidal rule
 (Exudyn's generalized-alpha with spectral radius 1, Newton tolerance 1e-6, modified Newton)
-and Exudyn's velocity Verlet (which Exudyn marks as under development and which evaluates
+and Exudyn's velocity Verlet at fixed steps, also at the step ``stiff_method = "VelocityVerlet"``
+takes (which Exudyn marks as under development and which evaluates
 velocity-dependent forces at the half-step velocity). Exudyn has no native connector for the
 laws of this model (power-law penalty contacts with clearance and ramped damping, friction
 driven by a contact's normal force); the last lines bound what native connectors could save:
@@ -32,7 +33,12 @@ import numpy as np
 from sensfw.excitation import Chirp
 from sensfw.models import integration
 from sensfw.models.shaft_assembly import PARAMETERS, ShaftAssembly
-from sensfw.models.stepsize import StepChoice, explicit_step, first_order_eigenvalues
+from sensfw.models.stepsize import (
+    StepChoice,
+    choose_integration,
+    explicit_step,
+    first_order_eigenvalues,
+)
 from sensfw.signal import frf, thd
 
 CASES = {
@@ -84,21 +90,21 @@ def scores(x, ex):
 def rhs_cost(model, p, ex, q0, variant: str) -> float:
     """CPU us per right-hand side (RK4, 10 us) with the contact laws as built, as trivial
     symbolic functions, or without user functions (native connectors of zero stiffness)."""
-    import sensfw.models.shaft_assembly as sa
+    import sensfw.models.planar.exudyn as pe
 
-    saved = sa._link_function, sa._user_function
+    saved = pe.link_function, pe.user_function
     if variant != "model":
         def trivial(ln, off, ops, contact, kind):
             def force(mbs, t, itemNumber, u, v, k, d, offset):
-                return sa._vector([0.0 * u[0], 0.0, 0.0], kind)
+                return pe.vector([0.0 * u[0], 0.0, 0.0], kind)
             return force
-        sa._link_function = trivial
+        pe.link_function = trivial
     if variant == "native":
-        sa._user_function = lambda mbs, item, function, name, kind: None
+        pe.user_function = lambda mbs, item, function, name, kind: None
     try:
         _, cpu, evals, _ = run(model, p, ex, q0, StepChoice(step=1e-5, substeps=5))
     finally:
-        sa._link_function, sa._user_function = saved
+        pe.link_function, pe.user_function = saved
     return cpu / evals * 1e6
 
 
@@ -116,8 +122,8 @@ def main() -> None:
     for case in args.cases.split(","):
         p = model.parameters().complete(CASES[case])
         q0 = model.equilibrium(p)
-        h_lin = explicit_step(first_order_eigenvalues(*model.linear_matrices(p, q0)), 1e-5,
-                              ex.fs)
+        eigenvalues = first_order_eigenvalues(*model.linear_matrices(p, q0))
+        h_lin = explicit_step(eigenvalues, 1e-5, ex.fs)
         k = h_lin.substeps
         ref, ref_cpu, *_ = run(model, p, ex, q0, StepChoice(step=h_lin.step / 2, substeps=2 * k))
         f, db_ref, thd_ref = scores(ref, ex)
@@ -141,6 +147,10 @@ def main() -> None:
                                                        substeps=round(50 / h)), False)
               for h in (2.5, 1.25)],
         ]
+        verlet = choose_integration(eigenvalues, 1e-5, ex.fs, stiff_method="VelocityVerlet")
+        if verlet.method == "VelocityVerlet":  # the step stiff_method = "VelocityVerlet" takes
+            candidates.append((f"velocity Verlet {verlet.step * 1e6:.3g} us (|lambda h| "
+                               f"{verlet.real_lambda_h:.2f})", verlet, False))
         for label, choice, implicit in candidates:
             try:
                 x, cpu, evals, steps = run(model, p, ex, q0, choice, implicit)

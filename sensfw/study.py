@@ -330,7 +330,8 @@ class Study:
                              f"suits {s.method}, or use RK44"))
         return SolverSettings(method=s.method, step=step, timeout=timeout,
                               halvings=s.halvings, auto_step=s.auto_step,
-                              tolerance=s.tolerance, spectral_radius=s.spectral_radius)
+                              tolerance=s.tolerance, stiff_method=s.stiff_method,
+                              spectral_radius=s.spectral_radius)
 
     def _resolve_groups(self, problems) -> dict[str, tuple[str, ...]]:
         if self.model is None:

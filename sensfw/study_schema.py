@@ -66,6 +66,10 @@ class SolverSection(_Strict):
     # adaptive steps with this absolute error tolerance where they are over-damped and stiff
     auto_step: bool = True
     tolerance: float = Field(default=DEFAULT_TOLERANCE, gt=0, lt=1e-3)
+    # over-damped stiff runs (friction stick band): DOPRI5 with error control
+    # (``tolerance``), or velocity Verlet at a fixed step (faster, first order); see
+    # models/stepsize.py
+    stiff_method: Literal["DOPRI5", "VelocityVerlet"] = "DOPRI5"
     # numerical dissipation of GeneralizedAlpha (rho_inf; 1 = none)
     spectral_radius: float = Field(default=0.8, ge=0.0, le=1.0)
 

@@ -125,6 +125,21 @@ def test_adaptive_tolerance_is_passed_on_and_checked():
         assert "solver.tolerance" in problems(data)
 
 
+def test_stiff_method_is_passed_on_and_checked():
+    """solver.stiff_method (how the runs whose friction stick band lies beyond RK4's
+    stability are integrated, models/stepsize.py) reaches the solver settings and the run
+    hash; an unknown one is named."""
+    data = copy.deepcopy(QUICK)
+    solver = Study.from_dict(data, "x.toml").solver
+    assert solver.stiff_method == "DOPRI5"
+    assert "stiff_method" not in solver.to_dict()  # runs of the default keep their hashes
+    data["solver"] = {"stiff_method": "VelocityVerlet"}
+    solver = Study.from_dict(data, "x.toml").solver
+    assert solver.to_dict()["stiff_method"] == "VelocityVerlet"
+    data["solver"] = {"stiff_method": "Euler"}
+    assert "solver.stiff_method" in problems(data)
+
+
 def test_missing_sections_and_bad_toml(tmp_path):
     got = problems({"stages": []})
     assert "study" in got and "stages" in got

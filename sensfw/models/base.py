@@ -12,7 +12,7 @@ from ..errors import SignalError
 from ..excitation import Chirp
 from ..params import ParameterSet
 from .places import Place
-from .stepsize import DEFAULT_TOLERANCE
+from .stepsize import DEFAULT_TOLERANCE, STIFF_METHOD
 
 
 @dataclass
@@ -92,8 +92,10 @@ class SolverSettings:
     the output sample period, and with ``auto_step`` one that keeps the fastest eigenvalues
     of the run's own parameters within the integrator's accuracy limits
     (:mod:`sensfw.models.stepsize`), or, where an over-damped eigenvalue would force a much
-    smaller fixed step, error-controlled adaptive steps of at most ``step`` with the
-    absolute ``tolerance`` (resampled onto the output grid, :mod:`sensfw.models.integration`).
+    smaller fixed step, the ``stiff_method``: error-controlled adaptive DOPRI5 steps of at
+    most ``step`` with the absolute ``tolerance`` (resampled onto the output grid,
+    :mod:`sensfw.models.integration`), or velocity Verlet at a fixed step (faster, first
+    order; :mod:`sensfw.models.stepsize`).
     The step a run used is in ``signals.meta["step"]``, the integrator in
     ``signals.meta["integrator"]``.
     """
@@ -104,12 +106,15 @@ class SolverSettings:
     halvings: int = 1  # retries with half the step after a divergence (explicit stability)
     auto_step: bool = True
     tolerance: float = DEFAULT_TOLERANCE  # absolute error tolerance of adaptive runs
+    stiff_method: str = STIFF_METHOD  # over-damped stiff runs: "DOPRI5" or "VelocityVerlet"
     #: numerical dissipation of the implicit generalised-alpha method (rho_inf, 0..1)
     spectral_radius: float = 0.8
 
     def to_dict(self) -> dict:
         out = {"method": self.method, "step": self.step, "halvings": self.halvings,
                "auto_step": self.auto_step, "tolerance": self.tolerance}
+        if self.stiff_method != STIFF_METHOD:  # runs of the default keep their hashes
+            out["stiff_method"] = self.stiff_method
         if self.method in IMPLICIT_METHODS:  # explicit runs keep the hashes they had
             out["spectral_radius"] = self.spectral_radius
         return out

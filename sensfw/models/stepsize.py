@@ -29,38 +29,44 @@ The limits are calibrated for RK44 (the default). They are conservative for DOPR
 whose stability regions are larger, and not sufficient for ExplicitEuler or
 ExplicitMidpoint, whose regions are smaller (Euler is unstable on the imaginary axis).
 
-**Very stiff over-damped runs integrate adaptively** (:func:`choose_integration`, issue 15).
-Where a real eigenvalue lies beyond RK4's stability at the requested step itself
-(``|lambda| h > ADAPTIVE_REAL_LAMBDA_H = 2.785``), the run uses Exudyn's DOPRI5 with error
-control (absolute tolerance ``solver.tolerance``) instead, with steps of at most the requested
-one, resampled onto the output grid (:mod:`sensfw.models.integration`). That is the stick
-band of the friction at small transition velocities: at the friction-velocity minimum of
-Table 1 (``|lambda| h = 4.1`` at 10 us) the relative axial velocity of the shafts stays
+**Very stiff over-damped runs** (:func:`choose_integration`, issue 15). Where a real
+eigenvalue lies beyond RK4's stability at the requested step itself
+(``|lambda| h > STIFF_REAL_LAMBDA_H = 2.785``), the run uses the ``stiff_method``. That is the
+stick band of the friction at small transition velocities: at the friction-velocity minimum
+of Table 1 (``|lambda| h = 4.1`` at 10 us) the relative axial velocity of the shafts stays
 inside ``|v| <= v_s`` 99.5-100 % of the time (measured on the 0.3 s chirp), so no step
-schedule can skip the band; what the controller gains is the margin: RK4 needs
-``|lambda| h <= 0.6`` for accuracy under load changes it cannot see, while the
-error-controlled DOPRI5 runs at its own stability limit (``|lambda| h ~ 3.3``, mean step
-8.0 us against 1.47 us) and reacts when the normal force grows. Per step it costs 7
-evaluations against RK4's 4: on the 1 s chirp it was 2.9x faster than RK4 at 1.47 us and
-within 0.04 dB (FRF) and 0.11 % (THD) of it. Below the threshold RK4 keeps its reduced fixed
-step: DOPRI5 is then not held at a stability limit, takes steps near the largest allowed one,
-and its error estimate missed the contact impacts of the all-min corner of Table 1
-(``|lambda| h = 1.7``): 0.58 dB from RK4 at tolerance 1e-9, 0.36 dB at 1e-10, 0.04 dB only at
-1e-11, where it cost as much as RK4 at 3.33 us (6.7 s CPU per simulated second both). On
-0.3 s chirps it was also 1.3-1.7x slower than RK4 on runs with mild or oscillatory limits
-(a slide-bearing contact at its softest and most damped; the all-max corner, where it rejects
-28 % of its steps).
+schedule can skip the band: it sets the step of the whole run, and the cost is the work per
+unit of ``|lambda| h``.
 
-Why the friction-velocity minimum still costs ~2.3x the nominal run (issue 15 asks for 2x):
-Exudyn's DOPRI5 evaluates the right-hand side 7 times per step, ODE23 and RK44 4 (no
-first-same-as-last reuse; counted with a Python user function), and the adaptive steps sit
-at the stick band's stability limit, so the tolerance barely sets the cost.
-``python bench/integrators.py --duration 1.0 --cases v-min`` (CPU s per simulated s, FRF
-change against RK4 at 0.74 us): DOPRI5 at 1e-9 3.27 s, 0.028 dB (0.028 dB below 200 Hz);
-ODE23, third order, 2.54 s at 1e-8 but 1.28 dB below 200 Hz, 2.64 s at 5e-9 (0.76 dB there),
-2.72 s at 3e-9 (0.37 dB there), 3.18 s at 1e-9; the nominal run (RK4 at 10 us) took 1.38 s
-(``bench/model.py`` prints both runs' ratio). Under 2x only where the low band loses tenths
-of a dB to a dB, so DOPRI5 stays.
+* ``"DOPRI5"`` (the default): Exudyn's DOPRI5 with error control (absolute ``tolerance``),
+  steps of at most the requested one, resampled onto the output grid
+  (:mod:`sensfw.models.integration`). Its steps sit at its own stability limit in the band
+  (``|lambda| h ~ 3.3``, mean 8.0 us at the friction-velocity minimum, where RK4 needs
+  ``|lambda| h <= 0.6`` for accuracy under load changes it cannot see, 1.47 us), and the
+  controller reacts when the normal force grows. It evaluates the right-hand side 7 times
+  per step (no first-same-as-last reuse in Exudyn; ODE23 and RK44 4, counted with a Python
+  user function), so that run costs 2.3x the nominal one (``bench/model.py``). ODE23 gets
+  under 2x only where it loses 0.37-1.28 dB below 200 Hz (``bench/integrators.py``).
+* ``"VelocityVerlet"``: Exudyn's velocity Verlet at a fixed grid step with ``|lambda| h <=
+  VERLET_REAL_LIMIT = 0.8`` (real) and ``<= VERLET_OSCILLATORY_LIMIT = 1`` (oscillatory).
+  One right-hand side per step; on a damper ``m x'' + c x' = f`` it is stable up to ``c h /
+  m = 2`` (it treats velocity-dependent forces explicitly, like explicit Euler;
+  ``tests/models/test_stepsize.py``), so it buys ``|lambda| h`` at 0.5 evaluations per unit
+  where RK4 pays 1.4 and DOPRI5 2.1; the limit leaves a factor 2.5 for the normal force to
+  grow under load (2.4x at the all-min corner). The friction-velocity-minimum run costs
+  1.33x the nominal one (1.92 us steps) and passes the convergence bar (1 s chirp: 0.16 dB
+  and 0.2 % THD at half the step, 0.26 dB and 0.2 % from RK4 at 1.47 us; DOPRI5: 0.04 dB).
+  The price is order: with velocity-dependent forces the method is first order (the error
+  halves with the step on a one-DOF model; second order without damping), and where the
+  stick band meets strongly nonlinear contact dynamics that shows. In the paper's DoE, on
+  the 15 runs at the friction-velocity minimum with ``slide_stiffness >= 3.56e6 N/mm`` (not
+  counting the 3 chaotic ones, README), its THD lies a median 5.9 % (up to 38 %, 8 runs
+  beyond 5 %) from RK4 at ``|lambda| h <= 0.6``, DOPRI5's 0.6 % (up to 15 %, 2 runs); at
+  half its step 1.9 % (up to 62 %, 5 runs). Hence not the default: a choice for fast screens
+  and calibrations, whose cost it cuts (the paper study: 118 s instead of 153 s on 2 cores;
+  the screen's ranking the same, the DoE's R2adj -0.03 for P2 and THD), not for the scores
+  of strongly nonlinear runs. Exudyn marks its velocity Verlet as under development (it
+  prints a warning).
 """
 
 from __future__ import annotations
@@ -77,10 +83,21 @@ CALIBRATED_METHODS = ("RK44", "RK67", "DOPRI5")
 REAL_LIMIT = 0.6
 #: Largest ``|lambda| h`` for oscillatory eigenvalues.
 OSCILLATORY_LIMIT = 1.5
-#: Integrate adaptively where a real eigenvalue lies beyond RK4's stability on the negative
-#: real axis (|R(z)| = 1 at z = -2.785) at the requested step.
-ADAPTIVE_REAL_LAMBDA_H = 2.785
-#: The adaptive integrator (Exudyn's Dormand-Prince 5(4) pair) and its default absolute
+#: Integrate with the stiff method where a real eigenvalue lies beyond RK4's stability on the
+#: negative real axis (|R(z)| = 1 at z = -2.785) at the requested step.
+STIFF_REAL_LAMBDA_H = 2.785
+#: The default stiff treatment: error-controlled DOPRI5 (see the module docstring).
+STIFF_METHOD = "DOPRI5"
+#: The fast stiff treatment, Exudyn's velocity Verlet (one right-hand side per step, stable
+#: to |lambda| h = 2 on a damper), at |lambda| h <= 0.8 for real eigenvalues (a factor 2.5
+#: for the growth of the friction's normal force under load) and <= 1.0 for oscillatory ones
+#: (half of Stormer-Verlet's stability limit omega h = 2).
+VERLET_REAL_LIMIT = 0.8
+VERLET_OSCILLATORY_LIMIT = 1.0
+#: Stiff treatments a solver may ask for: DOPRI5 with error control, or velocity Verlet at a
+#: fixed step.
+STIFF_METHODS = ("DOPRI5", "VelocityVerlet")
+#: The adaptive stiff treatment (Exudyn's Dormand-Prince 5(4) pair) and its default absolute
 #: tolerance: at 1e-9 the friction-velocity minimum was within 0.017 dB (FRF) and 0.01 %
 #: (THD) of RK4 at 0.74 us on the 0.3 s chirp, at 1e-8 within 0.075 dB, and the step count is
 #: set by stability there (43.5k steps at 1e-9, 42.8k at 1e-8, 47.3k at 1e-10 per 0.35 s).
@@ -167,16 +184,24 @@ def explicit_step(eigenvalues: np.ndarray, step_max: float, fs: float,
 
 def choose_integration(eigenvalues: np.ndarray, step_max: float, fs: float,
                        method: str = "RK44", tolerance: float = DEFAULT_TOLERANCE,
-                       adaptive_lambda_h: float = ADAPTIVE_REAL_LAMBDA_H) -> StepChoice:
-    """Fixed steps of ``method`` at :func:`explicit_step`, or adaptive ``ADAPTIVE_METHOD``
-    steps (at most the requested grid step, absolute ``tolerance``) where a real-axis
-    (over-damped) eigenvalue has ``|lambda| h > adaptive_lambda_h`` at the requested step
-    (see the module docstring)."""
+                       stiff_method: str = STIFF_METHOD,
+                       stiff_lambda_h: float = STIFF_REAL_LAMBDA_H) -> StepChoice:
+    """Fixed steps of ``method`` at :func:`explicit_step`, or, where a real-axis
+    (over-damped) eigenvalue has ``|lambda| h > stiff_lambda_h`` at the requested step, the
+    ``stiff_method``: adaptive DOPRI5 steps (at most the requested grid step, absolute
+    ``tolerance``), or fixed velocity Verlet steps within ``VERLET_REAL_LIMIT`` and
+    ``VERLET_OSCILLATORY_LIMIT``; see the module docstring."""
+    if stiff_method not in STIFF_METHODS:
+        raise ValueError(f"stiff method {stiff_method!r} is not one of {STIFF_METHODS}")
     fixed = replace(explicit_step(eigenvalues, step_max, fs), method=method)
     requested = grid_step(step_max, fs)
     rho_real, rho_osc = spectral_radii(eigenvalues)
-    if not rho_real * requested.step > adaptive_lambda_h:
+    if not rho_real * requested.step > stiff_lambda_h:
         return fixed
+    if stiff_method == "VelocityVerlet":
+        verlet = explicit_step(eigenvalues, step_max, fs, VERLET_REAL_LIMIT,
+                               VERLET_OSCILLATORY_LIMIT)
+        return replace(verlet, method="VelocityVerlet")
     if not tolerance > 0:
         raise ValueError(f"tolerance {tolerance!r} must be positive")
     return replace(requested, limited_by="real eigenvalue",

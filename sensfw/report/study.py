@@ -211,7 +211,9 @@ def _step_note(result) -> str:
 
     steps = [run_step(result.store, k) for st in result.stages for k in st.keys]
     adaptive = [s for s in steps if "adaptive" in s.get("integrator", "")]
-    smaller = [s for s in steps if s not in adaptive and s.get("step", result.study.solver.step)
+    verlet = [s for s in steps if s.get("integrator") == "VelocityVerlet"]
+    smaller = [s for s in steps if s not in adaptive and s not in verlet
+               and s.get("step", result.study.solver.step)
                < result.study.solver.step * (1 - 1e-9)]
     note = ""
     if smaller:
@@ -220,6 +222,12 @@ def _step_note(result) -> str:
                  f"{min(s['step'] for s in smaller) * 1e6:.3g} µs), set per run so that RK4 "
                  f"resolves the model's fastest linearised eigenvalues (limited by: "
                  f"{'; '.join(why)}).")
+    if verlet:
+        h = [s["step"] for s in verlet]
+        note += (f" {len(verlet)} of {len(steps)} runs, whose over-damped eigenvalues "
+                 f"(friction stick band) lie beyond RK4's stability at the study's step, "
+                 f"were integrated with velocity Verlet (one right-hand side per step) at "
+                 f"{min(h) * 1e6:.3g}-{max(h) * 1e6:.3g} µs.")
     if adaptive:
         mean = [s["mean_step"] for s in adaptive if "mean_step" in s]
         note += (f" {len(adaptive)} of {len(steps)} runs, whose over-damped eigenvalues "

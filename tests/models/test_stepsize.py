@@ -6,9 +6,11 @@ import pytest
 
 from sensfw.models.stepsize import (
     ADAPTIVE_METHOD,
-    ADAPTIVE_REAL_LAMBDA_H,
     OSCILLATORY_LIMIT,
     REAL_LIMIT,
+    STIFF_REAL_LAMBDA_H,
+    VERLET_OSCILLATORY_LIMIT,
+    VERLET_REAL_LIMIT,
     choose_integration,
     explicit_step,
     first_order_eigenvalues,
@@ -73,12 +75,93 @@ def test_limits_sit_inside_rk4_stability_with_accuracy_to_spare():
     assert abs(rk4_amplification(1j * 2.97)) > 1  # the stiff corner's mode at 10 us
 
 
-def test_a_stiff_viscous_element_is_integrated_adaptively():
+def test_a_stiff_viscous_element_can_be_integrated_with_velocity_verlet():
     """The friction stick band at its Table 1 minimum (|lambda| = 4.1e5 1/s) would need a
-    fixed RK4 step of 0.6 / 4.1e5 -> 1.43 us; the error-controlled DOPRI5 takes steps of at
-    most the requested 10 us instead."""
+    fixed RK4 step of 0.6 / 4.1e5 -> 1.43 us (4 right-hand sides per step); velocity Verlet
+    takes 0.8 / 4.1e5 -> 1.92 us (50 us / 26) with one per step."""
     c, m = 4.1e5, 1.0
-    assert c / m * 1e-5 > ADAPTIVE_REAL_LAMBDA_H
+    assert c / m * 1e-5 > STIFF_REAL_LAMBDA_H
+    lam = first_order_eigenvalues(np.eye(1) * m, np.zeros((1, 1)), np.array([[c]]))
+    got = choose_integration(lam, 1e-5, FS, "RK44", 1e-9, stiff_method="VelocityVerlet")
+    assert got.method == "VelocityVerlet" and not got.adaptive
+    assert got.substeps == 26 and got.step == pytest.approx(1 / (26 * FS))
+    assert got.limited_by == "real eigenvalue"
+    assert 0.75 < got.real_lambda_h <= VERLET_REAL_LIMIT == 0.8
+    rk4 = explicit_step(lam, 1e-5, FS)
+    assert rk4.substeps == 35  # RK4 at 1.43 us: 4 x 35 / 26 = 5.4x the evaluations
+    assert got.to_meta()["integrator"] == "VelocityVerlet"
+    assert choose_integration(lam, 1e-5, FS, "RK44").method == "DOPRI5"  # the default
+    with pytest.raises(ValueError, match="stiff method"):
+        choose_integration(lam, 1e-5, FS, "RK44", stiff_method="ExplicitEuler")
+
+
+def velocity_verlet_peak(c_h_over_m: float, steps: int = 2000, omega_h: float = 1e-3) -> float:
+    """Largest displacement (m) of Exudyn's VelocityVerlet on ``m x'' + c x' + k x = f``
+    (1 kg, 1 N switched on at t = 0; static displacement ``1 / k``) at a step with the given
+    ``c h / m`` and ``omega h`` (``omega = sqrt(k / m)``; the default is k = 100 N/m)."""
+    import exudyn as exu
+    from exudyn.itemInterface import (
+        CoordinateSpringDamper,
+        LoadCoordinate,
+        MarkerNodeCoordinate,
+        Mass1D,
+        Node1D,
+        NodePointGround,
+        SensorNode,
+    )
+
+    h = 1e-4
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddNode(NodePointGround())
+    node = mbs.AddNode(Node1D(referenceCoordinates=[0.0]))
+    mbs.AddObject(Mass1D(mass=1.0, nodeNumber=node))
+    markers = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=n, coordinate=0))
+               for n in (ground, node)]
+    mbs.AddObject(CoordinateSpringDamper(markerNumbers=markers, stiffness=(omega_h / h) ** 2,
+                                         damping=c_h_over_m / h))
+    mbs.AddLoad(LoadCoordinate(markerNumber=markers[1], load=1.0))
+    sensor = mbs.AddSensor(SensorNode(nodeNumber=node, storeInternal=True,
+                                      outputVariableType=exu.OutputVariableType.Coordinates))
+    mbs.Assemble()
+    ss = exu.SimulationSettings()
+    ss.timeIntegration.endTime = steps * h
+    ss.timeIntegration.numberOfSteps = steps
+    ss.timeIntegration.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = h
+    mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.VelocityVerlet)
+    x = np.asarray(mbs.GetSensorStoredData(sensor))[:, 1]
+    return float(np.max(np.abs(x))) if np.all(np.isfinite(x)) else np.inf
+
+
+def test_velocity_verlet_is_stable_on_a_damper_up_to_c_h_over_m_2():
+    """What VERLET_REAL_LIMIT rests on: Exudyn's velocity Verlet treats a velocity-dependent
+    force explicitly, so on a damper it is stable for ``c h / m <= 2`` (explicit Euler's
+    bound) and not beyond. The creep under the 1 N load stays below its static 1 cm up to
+    the bound, diverges past it. The limit 0.8 leaves a factor 2.5 for the normal force
+    (and so the stick band's slope) to grow under load."""
+    for r in (VERLET_REAL_LIMIT, 1.5, 1.99):
+        assert velocity_verlet_peak(r) <= 0.01 + 1e-12, r
+    assert velocity_verlet_peak(2.05, steps=1000) > 1.0
+
+
+def test_velocity_verlet_is_stable_on_an_oscillator_up_to_omega_h_2():
+    """What VERLET_OSCILLATORY_LIMIT rests on (half of the bound): undamped, a step load
+    swings the mass between 0 and twice its static displacement; Stormer-Verlet keeps that
+    swing (it conserves a modified energy: measured 2.000 static at omega h = 0.5 to 1.99) up
+    to ``omega h = 2`` and diverges past it."""
+    for wh in (VERLET_OSCILLATORY_LIMIT, 1.9):
+        static = (1e-4 / wh) ** 2  # 1 / k
+        assert velocity_verlet_peak(0.0, omega_h=wh) == pytest.approx(2 * static, rel=1e-5)
+    static = (1e-4 / 2.05) ** 2
+    assert velocity_verlet_peak(0.0, steps=1000, omega_h=2.05) > 1e3 * static
+
+
+def test_a_stiff_viscous_element_is_integrated_adaptively_by_default():
+    """The default stiff treatment: error-controlled DOPRI5 steps of at most the requested
+    10 us instead of RK4's 1.43 us."""
+    c, m = 4.1e5, 1.0
     lam = first_order_eigenvalues(np.eye(1) * m, np.zeros((1, 1)), np.array([[c]]))
     got = choose_integration(lam, 1e-5, FS, "RK44", 1e-9)
     assert got.adaptive and got.method == ADAPTIVE_METHOD == "DOPRI5"
@@ -103,4 +186,4 @@ def test_moderately_stiff_and_oscillatory_runs_keep_fixed_steps(c, k):
     assert not got.adaptive and got.method == "RK44"
     assert (got.step, got.substeps, got.limited_by) == (fixed.step, fixed.substeps,
                                                         fixed.limited_by)
-    assert c * 1e-5 <= ADAPTIVE_REAL_LAMBDA_H
+    assert c * 1e-5 <= STIFF_REAL_LAMBDA_H

@@ -187,12 +187,13 @@ class ShaftAssembly(Model):
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings,
                   q0: np.ndarray | None = None) -> StepChoice:
-        """The RK4 step of a run (:mod:`sensfw.models.stepsize`): at most ``solver.step``,
-        dividing the sample period ``1/fs``, and with ``solver.auto_step`` small enough for
-        the fastest eigenvalues of the model linearised at its static state ``q0`` (the
-        stick band of the slide-bearing friction, over-damped and stiff contacts)."""
+        """The integrator and step of a run (:mod:`sensfw.models.stepsize`): at most
+        ``solver.step``, dividing the sample period ``1/fs``, and with ``solver.auto_step``
+        small enough for the fastest eigenvalues of the model linearised at its static state
+        ``q0`` (over-damped and stiff contacts); RK4, or ``solver.stiff_method`` where the
+        stick band of the slide-bearing friction lies beyond RK4's stability."""
         if not solver.auto_step:
             return replace(grid_step(solver.step, fs), method=solver.method)
         M, K, D = self.linear_matrices(p, q0)
         return choose_integration(first_order_eigenvalues(M, K, D), solver.step, fs,
-                                  solver.method, solver.tolerance)
+                                  solver.method, solver.tolerance, solver.stiff_method)
