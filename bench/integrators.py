@@ -1,7 +1,9 @@
 """Candidate integrators for the stiff friction stick band (issue 15), on the same runs.
 
 Runs the screen run with the friction velocities at their minimum (``v-min``: the stick band
-at ``|lambda| h = 4.1`` for RK4 at 10 us) and the nominal run through Exudyn's integrators
+at ``|lambda| h = 4.1`` for RK4 at 10 us), a run of the paper's DoE at that minimum with the
+slide bearing's stiffness at its middle level (``v-min-doe``: 3.56e6 N/mm, THD ~43 %, the
+stick band meeting contact impacts) and the nominal run through Exudyn's integrators
 and prints, per candidate: right-hand-side evaluations and CPU seconds per simulated second,
 steps per CPU second, and the FRF change (dB RMS, Hv, crankshaft axial, 50 Hz - 5 kHz) and
 relative THD change against a reference (RK4 at half the step the linearisation asks for),
@@ -12,6 +14,10 @@ Candidates: RK4 at the fixed step of the linearisation (``|lambda| h <= 0.6``; t
 default) and at larger fixed steps; DOPRI5 and ODE23 with error control (sensor values
 resampled onto the sample grid, ``sensfw.models.integration``); the implicit trapezoidal rule
 (Exudyn's generalized-alpha with spectral radius 1, Newton tolerance 1e-6, modified Newton)
+and Newmark's method with ``beta = 1/12, gamma = 1/2`` (Fox & Goodwin 1949: the trapezoidal
+rule for the velocity-dependent forces, so the stick band is unconditionally stable, and a
+fourth-order period error where the trapezoidal rule's is second order; stable for
+``omega h < sqrt(6)``; steps reduced where Newton fails, every step recorded and resampled)
 and Exudyn's velocity Verlet at fixed steps, also at the step ``stiff_method = "VelocityVerlet"``
 takes (which Exudyn marks as under development and which evaluates
 velocity-dependent forces at the half-step velocity). Exudyn has no native connector for the
@@ -20,7 +26,7 @@ driven by a contact's normal force); the last lines bound what native connectors
 the right-hand side with the contact laws replaced by trivial symbolic functions, and with no
 user functions at all (native connectors of zero stiffness).
 
-    python bench/integrators.py [--duration 0.3] [--cases v-min,nominal]
+    python bench/integrators.py [--duration 0.3] [--cases v-min,v-min-doe,nominal]
 """
 
 from __future__ import annotations
@@ -44,12 +50,17 @@ from sensfw.signal import frf, thd
 CASES = {
     "nominal": PARAMETERS.nominal(),
     "v-min": {**PARAMETERS.nominal(), "slide_v_stiction": 0.01, "slide_v_friction": 0.1},
+    "v-min-doe": {**PARAMETERS.nominal(), "slide_v_stiction": 0.01, "slide_v_friction": 0.1,
+                  "slide_stiffness": 3.5603e6},
 }
 STAGES = {"RK44": 4, "DOPRI5": 7, "ODE23": 4, "VelocityVerlet": 1}
 
 
-def run(model, p, ex, q0, choice: StepChoice, implicit: bool = False):
-    """One run with ``choice``; returns the crankshaft channel, CPU s and RHS evaluations."""
+def run(model, p, ex, q0, choice: StepChoice, implicit: bool = False,
+        newmark_beta: float | None = None):
+    """One run with ``choice``; returns the crankshaft channel, CPU s and RHS evaluations.
+    ``newmark_beta``: Newmark's method with that beta and gamma = 1/2 (implicit), its steps
+    reduced where Newton fails (every step recorded and resampled)."""
     import exudyn as exu
 
     built = model.build(p, ex, q0=q0)
@@ -60,6 +71,11 @@ def run(model, p, ex, q0, choice: StepChoice, implicit: bool = False):
         ss.timeIntegration.newton.relativeTolerance = 1e-6
         ss.timeIntegration.newton.absoluteTolerance = 1e-6
         ss.timeIntegration.adaptiveStep = False
+    if newmark_beta is not None:
+        ga = ss.timeIntegration.generalizedAlpha
+        ga.useNewmark, ga.newmarkBeta, ga.newmarkGamma = True, newmark_beta, 0.5
+        ss.timeIntegration.adaptiveStep = True  # halve the step where Newton fails
+        ss.solution.sensors.writePeriod = 0.0  # then steps leave the grid: resample
     c0 = time.process_time()
     mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, choice.method))
     cpu = time.process_time() - c0
@@ -72,8 +88,8 @@ def run(model, p, ex, q0, choice: StepChoice, implicit: bool = False):
         evals = STAGES[choice.method] * (steps + int(it.rejectedAutomaticStepSizeSteps))
     data = np.asarray(mbs.GetSensorStoredData(built.sensors["crank_axial"][0]))
     n = ex.n_samples
-    x = (integration.resample(data[:, 0], data[:, 1], ex.fs, n) if choice.adaptive
-         else data[:n, 1])
+    x = (integration.resample(data[:, 0], data[:, 1], ex.fs, n)
+         if choice.adaptive or newmark_beta is not None else data[:n, 1])
     mbs.Reset()
     built.SC.Reset()
     return x, cpu, evals, steps
@@ -113,7 +129,7 @@ def main() -> None:
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--duration", type=float, default=0.3)
-    ap.add_argument("--cases", default="v-min,nominal")
+    ap.add_argument("--cases", default="v-min,v-min-doe,nominal")
     args = ap.parse_args()
     exu.config.printToConsole = False
     model = ShaftAssembly()
@@ -135,7 +151,7 @@ def main() -> None:
             (f"RK4 {h_lin.step * 1e6:.3g} us (linearisation)", StepChoice(step=h_lin.step,
                                                                           substeps=k), False),
             *[(f"RK4 {1e6 / (20000 * s):.3g} us", StepChoice(step=1 / (20000 * s), substeps=s),
-               False) for s in (10, 8) if s < k],
+               False) for s in (12, 11, 10, 9, 8) if s < k],
             *[(f"DOPRI5 tol {tol:g}", StepChoice(method="DOPRI5", tolerance=tol, **adaptive),
                False) for tol in (1e-8, 1e-9, 1e-10)],
             *[(f"ODE23 tol {tol:g}", StepChoice(method="ODE23", tolerance=tol, **adaptive),
@@ -143,6 +159,9 @@ def main() -> None:
             *[(f"trapezoidal {h:g} us", StepChoice(method="GeneralizedAlpha", step=h * 1e-6,
                                                    substeps=round(50 / h)), True)
               for h in (10, 5)],
+            *[(f"Newmark 1/12 {1e6 / (20000 * s):.3g} us", StepChoice(
+                method="GeneralizedAlpha", step=1 / (20000 * s), substeps=s), "newmark")
+              for s in (5, 8, 16)],
             *[(f"velocity Verlet {h:g} us", StepChoice(method="VelocityVerlet", step=h * 1e-6,
                                                        substeps=round(50 / h)), False)
               for h in (2.5, 1.25)],
@@ -153,7 +172,8 @@ def main() -> None:
                                f"{verlet.real_lambda_h:.2f})", verlet, False))
         for label, choice, implicit in candidates:
             try:
-                x, cpu, evals, steps = run(model, p, ex, q0, choice, implicit)
+                x, cpu, evals, steps = run(model, p, ex, q0, choice, bool(implicit),
+                                           1 / 12 if implicit == "newmark" else None)
             except exu.SolverError as exc:  # a candidate that fails is a result too
                 print(f"  {label:32s} failed: {exc}", flush=True)
                 continue
