@@ -40,6 +40,9 @@ class Effect(ABC):
     name: ClassVar[str] = "effect"
     #: kinds of place (:class:`~sensfw.models.places.Place`) the effect fits
     fits: ClassVar[tuple[str, ...]] = ()
+    #: optional hooks the effect uses, which only some places offer (``"add_jenkins"``:
+    #: :attr:`~sensfw.models.places.Place.offers`)
+    needs: ClassVar[tuple[str, ...]] = ()
     #: places tried first when ``attach`` is not given (names used by the shipped models)
     preferred_places: ClassVar[tuple[str, ...]] = ()
     signatures: ClassVar[tuple[str, ...]] = ()
@@ -82,6 +85,18 @@ class Effect(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(attach={self.attach!r})"
+
+
+def decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
+                  ) -> list[dict[str, float]]:
+    """Probes for an effect whose strength ``name`` spans decades (its axis starts at the
+    neutral 0, so the default quarter/half/full steps would all be strong): the strength at
+    ``fractions`` of its maximum (1 %, 10 % and all of it), the other parameters at their
+    nominal values."""
+    params = effect.parameters()
+    nominal = {p.name: p.nominal for p in params}
+    top = next(p.max for p in params if p.name == name)
+    return [{**nominal, name: top * f} for f in fractions]
 
 
 def make_effect(spec) -> Effect:

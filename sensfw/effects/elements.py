@@ -1,5 +1,6 @@
 """Effects that add force elements, bodies or mass: damping, preload, added mass, an
-elastic mode the rigid model lacks and a limit stop with play."""
+elastic mode the rigid model lacks, a limit stop with play and dry friction against the
+ground."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 from ..models.contact import clearance_force
 from ..params import Parameter
 from ..plugins import effects
-from .base import Effect
+from .base import Effect, decade_probes
 from .contact import MM
 
 
@@ -207,3 +208,55 @@ class LimitStop(Effect):
         2e3 N/mm lifts the 1.5 kHz mode by 5-9 % and breaks its single-mode fit), so the
         probes are soft."""
         return [{"stop_stiffness": 5e2, "stop_gap": g} for g in (1e-5, 4e-5, 1.6e-4)]
+
+
+@effects.register("dry_friction")
+class DryFriction(Effect):
+    """Dry (Coulomb) friction of a body point against the ground along the place's normal:
+    a Jenkins element, a spring of the pre-sliding stiffness in series with a Coulomb slider
+    (Iwan 1966; Al-Bender & Swevers 2008 for pre-sliding). While the point sticks, the
+    spring holds it; once its force reaches ``dry_friction_force`` the point slides against
+    that constant force (the slider is return-mapped by the model's integrator, exact
+    Coulomb friction with no regularising velocity: ``hooks.add_jenkins``). Something that
+    rubs where it should not: a shaker's armature in its guidance, a stinger's fixture, a
+    support or a cable.
+
+    At a drive point it takes a fixed force off the excitation, so the response per unit
+    drive is lowest at the lowest level, and the stiffness it adds while stuck is lost as it
+    slips: resonances move down with level, and its loss per cycle, ``4 F (a - F / k)`` for a
+    motion of amplitude ``a > F / k`` (Masing), is a damping that peaks near the level where
+    it breaks free and falls as ``1 / a`` above it. No force: no friction."""
+
+    name = "dry_friction"
+    fits = ("body",)
+    needs = ("add_jenkins",)
+    preferred_places = ("beam1",)
+    signatures = ("the response per unit drive is lowest at the lowest level",
+                  "resonances move down as the point breaks free",
+                  "damping that peaks near the level where it starts to slide", "odd harmonics")
+    signature_classes = frozenset({"softening"})
+    neutral: ClassVar[dict[str, float]] = {"dry_friction_force": 0.0}
+
+    def parameters(self):
+        # a shaker's drive force on the UNESP-BERT beam is 3-17 N (55 N/V, 0.05-0.30 V): a
+        # guidance friction of a few per cent of it is tenths of a newton; pre-sliding
+        # displacements F / k are microns to tens of microns
+        return [Parameter("dry_friction_force", "N", 0.2, 0.0, 2.0,
+                          "force at which the point slides (friction coefficient x normal "
+                          "load of what rubs)", "Effect: dry_friction"),
+                Parameter("dry_friction_stiffness", "N/mm", 10.0, 1.0, 1000.0,
+                          "pre-sliding stiffness: the slip force over the displacement "
+                          "before sliding", "Effect: dry_friction")]
+
+    def probes(self, comparisons):
+        """The slip force at 0.02, 0.2 and 2 N (its axis starts at the neutral 0), the
+        pre-sliding stiffness nominal."""
+        return decade_probes(self, "dry_friction_force")
+
+    def apply(self, place, hooks, p):
+        force = p["dry_friction_force"]
+        if force <= 0:  # neutral: no friction
+            return
+        hooks.add_jenkins(f"dry_friction@{place.name}", place.body0 or hooks.ground,
+                          place.r0, place.body1, place.r1, place.normal,
+                          p["dry_friction_stiffness"] / MM, force)

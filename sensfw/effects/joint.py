@@ -21,22 +21,10 @@ from ..errors import SensfwError
 from ..models.places import JointLaw
 from ..params import Parameter
 from ..plugins import effects
-from .base import Effect
+from .base import Effect, decade_probes
 from .elements import add_spring_along_normal
 
 MM = 1e-3
-
-
-def _decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
-                   ) -> list[dict[str, float]]:
-    """Probes for an effect whose strength ``name`` spans decades (its axis starts at the
-    neutral 0, so the default quarter/half/full steps would all be strong): the strength at
-    ``fractions`` of its maximum (1 %, 10 % and all of it), the other parameters at their
-    nominal values."""
-    params = effect.parameters()
-    nominal = {p.name: p.nominal for p in params}
-    top = next(p.max for p in params if p.name == name)
-    return [{**nominal, name: top * f} for f in fractions]
 
 
 @dataclass(frozen=True)
@@ -95,6 +83,7 @@ class MicroSlip(Effect):
 
     name = "micro_slip"
     fits = ("joint",)
+    needs = ("add_jenkins",)
     preferred_places = ("joint",)
     signatures = ("resonances move down as the level rises", "damping grows with level",
                   "odd harmonics")
@@ -131,7 +120,7 @@ class MicroSlip(Effect):
         """The macro-slip force at 200 N, 2 kN and 20 kN with a tenth of the joint's
         stiffness left (the elements slip at the measured levels at the lower forces and
         stick at the higher), the rest nominal."""
-        return _decade_probes(self, "microslip_force")
+        return decade_probes(self, "microslip_force")
 
     def apply(self, place, hooks, p):
         if p["microslip_residual"] >= 1.0:  # neutral: the joint's own law, untouched
@@ -193,7 +182,7 @@ class CubicStiffness(Effect):
     def probes(self, comparisons):
         """The cubic coefficient at 1e8, 1e10 and 1e12 N/mm^3 (a joint's slip of microns
         wants the low end, a body point moving a tenth of a micron the high end)."""
-        return _decade_probes(self, "cubic_stiffness", (1e-4, 1e-2, 1.0))
+        return decade_probes(self, "cubic_stiffness", (1e-4, 1e-2, 1.0))
 
     def apply(self, place, hooks, p):
         k3 = p["cubic_stiffness"] / MM**3

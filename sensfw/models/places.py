@@ -24,6 +24,12 @@ Place kinds used by the shipped models:
     ``normal`` from the relative normal displacement. The joint's effects (micro-slip
     friction, cubic stiffness, clearance) wrap or replace it, or add force elements and
     bodies at its points (a Jenkins slider).
+
+Every place offers the hooks ``contact_law``/``set_contact_law`` (contacts and joints),
+``add_force``, ``add_body`` and ``add_mass``. A hook that needs the model's integrator to
+carry a state of its own, ``add_jenkins`` (a slider position updated after every step), is
+listed in the place's ``offers`` where the model has it; an effect that ``needs`` it fits
+only such places.
 """
 
 from __future__ import annotations
@@ -69,6 +75,8 @@ class Place:
     #: ``(r0, r1)`` pair (``r0``/``r1`` is one of them); the model shares the joint's law
     #: among them, and an effect that adds elements along the interface may do the same
     points: tuple[tuple[Point, Point], ...] = ()
+    #: optional hooks the model offers here beyond the standard ones (``"add_jenkins"``)
+    offers: frozenset[str] = frozenset()
 
 
 @runtime_checkable
@@ -138,7 +146,8 @@ class Hooks(Protocol):
         """Add a Jenkins element along ``direction`` between a point of ``body0`` and a point
         of ``body1``: a spring ``stiffness`` (N/m) in series with a Coulomb slider that slips
         at ``slip_force`` (N), stuck at the static state. Its slider position is a state the
-        integrator updates after every step (no regularisation); models that cannot raise
+        integrator updates after every step (no regularisation). Optional: offered where a
+        place lists it in ``offers``; models that cannot raise
         :class:`~sensfw.errors.SensfwError`."""
         ...
 
@@ -156,6 +165,8 @@ class EffectLike(Protocol):
 
     name: str
     fits: tuple[str, ...]
+    #: optional hooks the effect uses (:attr:`Place.offers`)
+    needs: tuple[str, ...]
     attach: str | None
 
     def parameters(self) -> list: ...
@@ -164,8 +175,10 @@ class EffectLike(Protocol):
 
 
 def fitting_places(places: Mapping[str, Place], effect: EffectLike | type) -> list[str]:
-    """Names of the places of kinds ``effect`` fits, in the model's order."""
-    return [n for n, pl in places.items() if pl.kind in effect.fits]
+    """Names of the places of kinds ``effect`` fits that offer the optional hooks it
+    ``needs``, in the model's order."""
+    needs = set(getattr(effect, "needs", ()) or ())
+    return [n for n, pl in places.items() if pl.kind in effect.fits and needs <= pl.offers]
 
 
 def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
@@ -179,8 +192,12 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
     out, owners = [], {}
     for eff in effects:
         fits = fitting_places(places, eff)
+        needs = tuple(getattr(eff, "needs", ()) or ())
         if not fits:
             kinds = sorted({pl.kind for pl in places.values()})
+            if any(pl.kind in eff.fits for pl in places.values()):
+                raise SensfwError(f"effect {eff.name!r} needs the hook(s) {', '.join(needs)}, "
+                                  f"which no place of model {model!r} offers")
             raise SensfwError(f"effect {eff.name!r} fits places of kind "
                               f"{', '.join(eff.fits)}; model {model!r} has places of kind "
                               f"{', '.join(kinds) or '(none)'}")
@@ -196,6 +213,8 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
                                   f"{', '.join(fits)} of model {model!r}")
         elif name not in fits:
             what = (f"{name!r} is a {places[name].kind}" if name in places
+                    and places[name].kind not in eff.fits
+                    else f"{name!r} does not offer {', '.join(needs)}" if name in places
                     else f"model {model!r} has no place {name!r}")
             raise SensfwError(f"effect {eff.name!r} cannot attach to {name!r} ({what}); it "
                               f"fits {', '.join(fits)}")

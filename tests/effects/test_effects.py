@@ -38,7 +38,7 @@ def test_every_effect_attaches_at_every_place_it_fits_and_has_a_static_state():
     for name in effects.names():
         cls = effects.get(name)
         fits = fitting_places(places, cls)
-        if not fits:  # a joint effect: it fits the other shipped model
+        if not fits:  # a joint effect, or one that needs sliders: it fits the beam
             from sensfw.models.bolted_beam import BoltedBeam
 
             assert fitting_places(BoltedBeam().places(), cls), name
@@ -240,7 +240,7 @@ def test_every_effect_vanishes_exactly_at_its_neutral_values():
     for name in effects.names():
         cls = effects.get(name)
         assert cls.neutral, f"{name} declares no neutral values"
-        if not fitting_places(shaft, cls):  # a joint effect: tests/effects/test_joint_effects
+        if not fitting_places(shaft, cls):  # fits the beam: tests/effects/test_joint_effects
             continue
         model = ShaftAssembly(effects=[name])
         p = full(model, **cls.neutral)

@@ -49,9 +49,9 @@ def test_every_effect_attaches_at_every_place_of_the_beam_it_fits():
             assert np.max(np.abs(st.residual(z0))) < 1e-6, (name, place)
             tried += 1
     # damping at 4 places; clearance at the joint and the clamp; added mass, preload,
-    # flexible mode, limit stop and cubic stiffness at the 2 beams; micro-slip and cubic
-    # stiffness at the joint; friction and contact hardening at the clamp
-    assert tried == 4 + 2 + 5 * 2 + 2 + 2
+    # flexible mode, limit stop, cubic stiffness and dry friction at the 2 beams; micro-slip
+    # and cubic stiffness at the joint; friction and contact hardening at the clamp
+    assert tried == 4 + 2 + 6 * 2 + 2 + 2
 
 
 def test_every_effect_vanishes_exactly_at_its_neutral_values_on_the_beam():
@@ -70,7 +70,7 @@ def test_every_effect_vanishes_exactly_at_its_neutral_values_on_the_beam():
             for ch in base.channels:
                 assert np.array_equal(sig.channels[ch], base.channels[ch]), (name, place, ch)
             tried += 1
-    assert tried == 4 + 2 + 5 * 2 + 2 + 2  # as in the test above
+    assert tried == 4 + 2 + 6 * 2 + 2 + 2  # as in the test above
 
 
 def test_the_joint_place_lists_its_interface_points():
@@ -110,6 +110,38 @@ def test_damping_at_the_joint_adds_a_dashpot_between_its_two_points():
     G[[0, 1], [j, j + 1]] = 1.0
     G[[0, 1], [i, i + 1]] = -1.0
     np.testing.assert_allclose(D1 - D0, 200.0 * G.T @ G, atol=1e-3)
+
+
+def test_dry_friction_holds_the_point_by_its_pre_sliding_spring_while_it_sticks():
+    """Stuck (the law the statics and the linearisation use), dry friction is its
+    pre-sliding spring from the ground to the body point along the place's normal: the
+    stiffness matrix gains exactly ``k`` on that coordinate and nothing else."""
+    base = BoltedBeam()
+    model = BoltedBeam(effects=[{"name": "dry_friction", "attach": "beam1"}])
+    p = full(model, dry_friction_force=0.3, dry_friction_stiffness=50.0)
+    _, K0, _ = base.linear_matrices(own(p))
+    _, K1, _ = model.linear_matrices(p)
+    _, st, _, _ = model.state(p)
+    i = st.coordinate("beam1", (base.geometry.shaker_x, 0.0)) + 1  # transverse (normal)
+    dK = K1 - K0
+    assert dK[i, i] == pytest.approx(50.0e3, rel=1e-9)
+    dK[i, i] = 0.0
+    assert np.max(np.abs(dK)) < 1e-6 * 50.0e3
+
+
+def test_dry_friction_needs_a_model_that_carries_sliders():
+    """The shaft model's explicit integrator carries no slider states: its places do not
+    offer ``add_jenkins``, so dry friction fits none of them, and asking for it says why."""
+    from sensfw.errors import SensfwError
+    from sensfw.models.shaft_assembly import ShaftAssembly
+
+    cls = effects.get("dry_friction")
+    assert fitting_places(ShaftAssembly().places(), cls) == []
+    assert fitting_places(BoltedBeam().places(), cls) == ["beam1", "beam2"]
+    for spec in ({"name": "dry_friction", "attach": "crankshaft"}, "dry_friction"):
+        with pytest.raises(SensfwError, match=r"needs the hook\(s\) add_jenkins, which no "
+                                              r"place of model 'shaft_assembly' offers"):
+            ShaftAssembly(effects=[spec])
 
 
 def test_cubic_stiffness_adds_a_cubic_term_to_the_joint_law_only():
@@ -267,3 +299,19 @@ def test_cubic_stiffness_hardens_the_joint_as_the_level_rises():
     low, high = resonance(model, p, 0.1), resonance(model, p, 10.0)
     assert abs(low[0] - second_mode(model, p)) < 0.15, low
     assert high[0] > low[0] + 0.5, (low, high)
+
+
+@pytest.mark.slow
+def test_dry_friction_at_the_drive_point_sticks_at_low_level_and_slides_at_high():
+    """A pre-sliding spring of 30 N/mm at the shaker's point (the second mode 3 Hz above the
+    beam's without it) that slides at 0.2 N (7 um): at 5 mN of drive the point sticks and
+    the mode is the stuck model's eigenfrequency; at 20 N it slides, friction takes 1 % of
+    the drive and the mode is the beam's without the spring (the same 1/4 Hz interpolation
+    tolerance as above; a Coulomb force of 1 % of the drive damps, it does not shift)."""
+    model = BoltedBeam(effects=[{"name": "dry_friction", "attach": "beam1"}])
+    p = full(model, dry_friction_force=0.2, dry_friction_stiffness=30.0)
+    stuck, free = second_mode(model, p), second_mode(BoltedBeam(), own(p))
+    assert stuck > free + 2.0, (stuck, free)  # the spring is a lever on the mode
+    low, high = resonance(model, p, 0.005), resonance(model, p, 20.0)
+    assert abs(low[0] - stuck) < 0.15, (low, stuck)
+    assert abs(high[0] - free) < 0.15, (high, free)

@@ -18,6 +18,7 @@ and force elements (a :class:`~.assembly.BeamAssembly`).
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 
 from ..contact import PenaltyLaw
 from ..joint import LinearJoint
@@ -54,7 +55,8 @@ def places(g: Geometry) -> dict[str, Place]:
         Place("beam2", "body", "free beam, at its free end (Acc1, laser)", GROUND,
               (g.free_end, 0.0), "beam2", (g.free_end, 0.0), TRANSVERSE, AXIAL),
     ]
-    return {p.name: p for p in out}
+    # the beam's integrator carries Jenkins sliders (simulation.JenkinsSliders) anywhere
+    return {p.name: replace(p, offers=frozenset({"add_jenkins"})) for p in out}
 
 
 def laws(p: Mapping[str, float], g: Geometry) -> dict:
