@@ -292,7 +292,11 @@ def augment(
     text = add_effect(study_file.read_text(encoding="utf-8"), name, result["attach"],
                       calibrated, note)
     if result.get("variables"):
-        text = set_calibration(text, result["variables"])
+        # the effect is part of the model now: a later round (diagnose or augment of this
+        # study) recalibrates its parameters with the base variables
+        text = set_calibration(text, [*result["variables"],
+                                      *(k for k in result["params"]
+                                        if k not in result["variables"])])
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "study.toml").write_text(text, encoding="utf-8")
     Study.load(out_dir / "study.toml")  # the augmented file must itself be valid

@@ -292,7 +292,12 @@ def _allows(cls, found: Mapping) -> bool:
 
 def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: Log
                 ) -> list[Hypothesis]:
-    places = model_with_effects(study, []).places()
+    model = model_with_effects(study, [])
+    places = model.places()
+    # effects the study's model already has (an augmented study): their parameters are the
+    # model's, so the same effect cannot be added again, here or at another place
+    owned = {p.name: f"{e.name}@{e.attach}" for e in getattr(model, "effects", ())
+             for p in e.parameters()}
     wanted = []
     for c in candidates or effect_registry.names():
         name, _, place = c.partition("@")
@@ -307,6 +312,10 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
         if not _allows(cls, found):
             log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
                 "measurement's; left out")
+            continue
+        clash = sorted({owned[p.name] for p in cls().parameters() if p.name in owned})
+        if clash:
+            log(f"  {name}: the model has it already ({', '.join(clash)}); left out")
             continue
         for pl in [place] if place else fits:
             eff = cls(attach=pl)

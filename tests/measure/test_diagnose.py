@@ -124,7 +124,8 @@ def test_noise_and_offsets_never_give_an_effect(noise, seed, study, runner, tmp_
 def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_path):
     """The commands end to end on a flexible mode measured at two levels: diagnose.json
     names it, with the held-out-level error of each calibrated hypothesis next to its BIC;
-    augment starts from it, writes a study with the effect, its values and [calibration],
+    augment starts from it, writes a study with the effect, its values and [calibration]
+    (the base variables and the effect's parameters),
     and the error falls at each level along nominal -> base recalibrated -> jointly
     calibrated."""
     import tomlkit
@@ -160,7 +161,10 @@ def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_pat
     written = tomllib.loads((tmp_path / "a" / "study.toml").read_text())
     assert written["model"]["options"]["effects"] == [{"name": "flexible_mode",
                                                        "attach": "driveshaft"}]
-    assert written["calibration"]["parameters"] == short_quick()["calibration"]["parameters"]
+    # the base variables and the effect's parameters: the next round recalibrates them all
+    assert written["calibration"]["parameters"] == [
+        *short_quick()["calibration"]["parameters"], "flex_frequency", "flex_damping",
+        "flex_mass"]
     assert written["parameters"]["flex_frequency"]["nominal"] == pytest.approx(
         aug["params"]["flex_frequency"])
     Study.load(tmp_path / "a" / "study.toml")
@@ -258,3 +262,22 @@ def test_a_clearance_crossed_between_two_levels_is_found_with_its_gap(study, run
         assert values[name]["value"] == pytest.approx(truth, rel=0.15), values[name]
     assert "hardening" in res.signature_classes
     check_nested(res)
+
+
+def test_a_second_round_leaves_out_the_effects_the_model_already_has():
+    """Diagnosing an augmented study (the bolted beam with micro_slip at its joint): the
+    same effect cannot be added again, at its place or another (its parameters are the
+    model's), so it is left out with the reason; the other candidates stay."""
+    from sensfw.measure.calibrate import Coordinates
+    from sensfw.measure.diagnose import _hypotheses
+    from sensfw.studyfile import add_effect
+
+    root = Path(__file__).resolve().parents[2]
+    text = add_effect((root / "studies" / "bert.toml").read_text(encoding="utf-8"),
+                      "micro_slip", "joint", {})
+    augmented = Study.from_dict(tomllib.loads(text), "bert")
+    said = []
+    hyps = _hypotheses(augmented, ["micro_slip@joint", "dry_friction"], {}, Coordinates([]),
+                       said.append)
+    assert [h.name for h in hyps] == ["dry_friction@beam1", "dry_friction@beam2"]
+    assert any("micro_slip: the model has it already (micro_slip@joint)" in s for s in said)
