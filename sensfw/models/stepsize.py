@@ -45,8 +45,21 @@ unit of ``|lambda| h``.
   ``|lambda| h <= 0.6`` for accuracy under load changes it cannot see, 1.47 us), and the
   controller reacts when the normal force grows. It evaluates the right-hand side 7 times
   per step (no first-same-as-last reuse in Exudyn; ODE23 and RK44 4, counted with a Python
-  user function), so that run costs 2.3x the nominal one (``bench/model.py``). ODE23 gets
-  under 2x only where it loses 0.37-1.28 dB below 200 Hz (``bench/integrators.py``).
+  user function), so that run costs 2.3x the nominal one (``bench/model.py``). Nothing
+  Exudyn offers does the same work for less (``bench/integrators.py``, 0.3 s chirp, against
+  RK4 at half the linearised step): ODE23 gets under 2x only where it loses 0.37-1.28 dB
+  below 200 Hz; RK4 near its stability limit (5.56 us, ``|lambda| h = 2.3``, 1.98x) is 0.31
+  dB off on the v-min run and 12 dB on a DoE run at that minimum with the slide stiffness
+  at its middle level (THD 43 %, contact impacts in the stick band); Newmark's method with
+  ``beta = 1/12`` (Fox-Goodwin: trapezoidal for the damping, so the stick band is
+  unconditionally stable, fourth-order period error) costs 1.3x at 6.25 us and is 0.08 dB
+  off on the v-min run but 3.5 dB on that DoE run, where DOPRI5 is 0.17 dB; a step-reduction
+  check does not tell its good runs from its bad ones (on the 27 DoE runs at the minimum,
+  the 15 without a reduced step were up to 3.3 dB from DOPRI5, ``--doe``). RK67 is stable
+  only at 6.25 us (2.6x); DVERK6 is not implemented in Exudyn 1.13. An implicit update of
+  the stick band alone inside the explicit step would need a hook in Exudyn's solver loop,
+  which it does not
+  offer (a Python pre-step function per 10 us step costs more than the step).
 * ``"VelocityVerlet"``: Exudyn's velocity Verlet at a fixed grid step with ``|lambda| h <=
   VERLET_REAL_LIMIT = 0.8`` (real) and ``<= VERLET_OSCILLATORY_LIMIT = 1`` (oscillatory).
   One right-hand side per step; on a damper ``m x'' + c x' = f`` it is stable up to ``c h /
