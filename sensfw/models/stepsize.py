@@ -58,8 +58,8 @@ unit of ``|lambda| h``.
   the 15 without a reduced step were up to 3.3 dB from DOPRI5, ``--doe``). RK67 is stable
   only at 6.25 us (2.6x); DVERK6 is not implemented in Exudyn 1.13. An implicit update of
   the stick band alone inside the explicit step would need a hook in Exudyn's solver loop,
-  which it does not
-  offer (a Python pre-step function per 10 us step costs more than the step).
+  which it does not offer (a Python pre-step function per 10 us step costs more than the
+  step).
 * ``"VelocityVerlet"``: Exudyn's velocity Verlet at a fixed grid step with ``|lambda| h <=
   VERLET_REAL_LIMIT = 0.8`` (real) and ``<= VERLET_OSCILLATORY_LIMIT = 1`` (oscillatory).
   One right-hand side per step; on a damper ``m x'' + c x' = f`` it is stable up to ``c h /
