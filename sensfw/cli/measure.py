@@ -184,6 +184,9 @@ def diagnose(
              "at every place it fits)")] = None,
     budget: Annotated[int, typer.Option(
         help="simulations for the whole diagnosis (H0, screen, calibrations)")] = 300,
+    prune: Annotated[bool, typer.Option(
+        help="leave out candidates whose signature classes the levels do not show "
+             "(--no-prune: try them all)")] = True,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -201,7 +204,7 @@ def diagnose(
     t0 = time.perf_counter()
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         names = [c.strip() for c in candidates.split(",")] if candidates else None
-        result = run_diagnose(study, meas, runner, names, budget=budget,
+        result = run_diagnose(study, meas, runner, names, budget=budget, prune=prune,
                               log=say)
     data = {**result.to_dict(), "wall_s": time.perf_counter() - t0}
     _json(out_dir / "diagnose.json", data)

@@ -146,15 +146,18 @@ def _calibrate_h0(ev: Evaluator, coords: Coordinates, start: Evaluation, budget:
 
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
              candidates: Sequence[str] | None = None, refine: int = 3,
-             min_delta_bic: float = 10.0, budget: int = 300, log: Log = lambda s: None
-             ) -> DiagnoseResult:
+             min_delta_bic: float = 10.0, budget: int = 300, prune: bool = True,
+             log: Log = lambda s: None) -> DiagnoseResult:
     """Diagnose the missing physics (module docstring). ``candidates`` are effect names
     (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it fits);
     ``budget`` caps the simulations of the whole diagnosis: H0's calibration takes at most
     a third, the screen about ten per screened candidate (two each for the first look when
     there are many, :func:`~sensfw.measure.screening.screen`), the joint calibrations share
     what is left (each gets at least a few Jacobians); the held-out predictions, one per
-    level and calibrated hypothesis, come on top."""
+    level and calibrated hypothesis, come on top. ``prune=False`` keeps the candidates whose
+    signature classes the discrepancy does not show (the classes name what the levels
+    reveal, not every mechanism: a friction that takes force off the drive at low levels
+    moves no resonance)."""
     names, source = calibration_variables(study, runner, log)
     space = study.calibration_space(names)
     ev = Evaluator(study, measurements, runner, space)
@@ -173,7 +176,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     (h0_all,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
     h0_cmp = ev.output_comparisons(h0_all)
     found = _signature_classes(h0_cmp)
-    hyps = _hypotheses(study, candidates, found, base_coords, log)
+    hyps = _hypotheses(study, candidates, found, base_coords, log, prune)
     log(f"{len(hyps)} candidate(s) after the signature classes {sorted(found) or '(none)'}")
     screen(ev, h0, hyps, h0_cmp, log, nominal_values)
     ranked = sorted(hyps, key=lambda h: h.screen_chi2)
@@ -290,8 +293,8 @@ def _allows(cls, found: Mapping) -> bool:
     return not found or signatures.allows(cls, found)
 
 
-def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: Log
-                ) -> list[Hypothesis]:
+def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: Log,
+                prune: bool = True) -> list[Hypothesis]:
     model = model_with_effects(study, [])
     places = model.places()
     # effects the study's model already has (an augmented study): their parameters are the
@@ -310,9 +313,12 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
             raise SensfwError(f"candidate {name}@{place}: the model has no place {place!r} "
                               f"that {name} fits ({', '.join(fits)})")
         if not _allows(cls, found):
+            if prune:
+                log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
+                    "measurement's; left out")
+                continue
             log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
-                "measurement's; left out")
-            continue
+                "measurement's; kept (no pruning)")
         clash = sorted({owned[p.name] for p in cls().parameters() if p.name in owned})
         if clash:
             log(f"  {name}: the model has it already ({', '.join(clash)}); left out")

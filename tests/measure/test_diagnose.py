@@ -267,7 +267,8 @@ def test_a_clearance_crossed_between_two_levels_is_found_with_its_gap(study, run
 def test_a_second_round_leaves_out_the_effects_the_model_already_has():
     """Diagnosing an augmented study (the bolted beam with micro_slip at its joint): the
     same effect cannot be added again, at its place or another (its parameters are the
-    model's), so it is left out with the reason; the other candidates stay."""
+    model's), so it is left out with the reason; the other candidates stay, pruned by the
+    signature classes unless ``prune=False`` (``--no-prune``)."""
     from sensfw.measure.calibrate import Coordinates
     from sensfw.measure.diagnose import _hypotheses
     from sensfw.studyfile import add_effect
@@ -281,3 +282,10 @@ def test_a_second_round_leaves_out_the_effects_the_model_already_has():
                        said.append)
     assert [h.name for h in hyps] == ["dry_friction@beam1", "dry_friction@beam2"]
     assert any("micro_slip: the model has it already (micro_slip@joint)" in s for s in said)
+    # the classes the levels show prune the candidates, unless told not to
+    found = {"even_harmonics": []}
+    assert _hypotheses(augmented, ["dry_friction@beam1"], found, Coordinates([]),
+                       said.append) == []
+    kept = _hypotheses(augmented, ["dry_friction@beam1"], found, Coordinates([]), said.append,
+                       prune=False)
+    assert [h.name for h in kept] == ["dry_friction@beam1"]
