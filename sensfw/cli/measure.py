@@ -307,6 +307,9 @@ def augment(
     _json(out_dir / "augment.json", result)
     write_augment_report(study, result, out_dir / "report.html", comps)
     for t in result["trajectory"]:
+        if t["error"] is None:
+            out.print(f"  {t['step']:20s} its runs failed (see the run store)")
+            continue
         per = t.get("error_per_level") or []
         levels = ", ".join(f"{e:.2f}" for e in per)
         out.print(f"  {t['step']:20s} error {t['error']:.3f} dB" +

@@ -66,12 +66,18 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
             raise SensfwError(f"start values for {effect} lack {missing}")
         first = {k: float(start[k]) for k in want}
         (w,) = ev.evaluate(h.spec, [first], f"{effect} start")
+        if w is None:
+            raise SensfwError(f"the model with {h.name} failed at the start values: "
+                              f"{ev.failures.get(f'{effect} start', '?')}")
         h.screen_best = min([Evaluation(first, w),
                              Evaluation({**h0.fit.values, **neutral_values(eff)}, h0.fit.best.w)],
                             key=lambda e: e.chi2)
     else:
         (h0_cmp,) = ev.comparisons([ev.variant(None, h0.fit.values)], "base recalibrated")
         screen(ev, h0, [h], ev.output_comparisons(h0_cmp), log)
+        if all(e.w is None for e in h.screened):
+            raise SensfwError(f"the model with {h.name} failed at every probe: "
+                              f"{ev.failures.get(f'screen {h.name}', '?')}")
     log(f"calibrating {h.name} jointly with {', '.join(names)}")
     _calibrate_candidate(ev, h0, h, budget // 2, log)
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),

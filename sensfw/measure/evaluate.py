@@ -44,6 +44,8 @@ class Evaluator:
         self.band = (ex.f0, ex.f1)
         self.n_simulations = 0
         self.entries: discrepancy.Entries | None = None
+        #: label of the batch -> the reason of its last failed run (the run store's error)
+        self.failures: dict[str, str] = {}
 
     @property
     def n_levels(self) -> int:
@@ -67,8 +69,11 @@ class Evaluator:
         ``detail=False``: without the model's resonance fits (residuals only)."""
         idx = list(range(len(self.meas))) if levels is None else list(levels)
         meas = [self.meas[i] for i in idx]
-        sims = simulate(self.study, self.runner, variants, meas, label)
+        errors: dict = {}
+        sims = simulate(self.study, self.runner, variants, meas, label, errors)
         self.n_simulations += len(sims)
+        for err in errors.values():
+            self.failures[label] = err
         out = []
         for v in variants:
             comps = []

@@ -59,6 +59,11 @@ def screen(ev: Evaluator, h0, hyps: Sequence, h0_cmp, log,
             f"{', '.join(h.name for h in hyps)}")
     for h in hyps:
         _probe(ev, h0, h, bases, h.effect.probes(h0_cmp))
+        if all(e.w is None for e in h.screened):
+            why = ev.failures.get(f"screen {h.name}", "?")
+            h.notes.append(f"every run of the screen failed: {why}")
+            log(f"  screen {h.name}: every run failed ({why})")
+            continue
         log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {h.screen_chi2:.4g}")
 
 

@@ -64,15 +64,17 @@ def spec_for(study: Study, variant: Variant, meas: Measurement) -> RunSpec:
     for k, v in variant.params:
         params[k] = (declared[k] if k in declared else study.parameters[k]).check(v)
     ref = study.model_ref()
-    if variant.effects:
-        ref = {"name": ref["name"], "options": {**ref["options"],
-                                                "effects": variant.effect_specs}}
+    if variant.effects:  # the study's own effects, then the variant's (model_with_effects)
+        effects = [*ref["options"].get("effects", []), *variant.effect_specs]
+        ref = {"name": ref["name"], "options": {**ref["options"], "effects": effects}}
     return RunSpec.create(model, params, meas.drive, study.solver, ref)
 
 
 def simulate(study: Study, runner: Runner, variants: Sequence[Variant],
-             measurements: Sequence[Measurement], label: str = "model") -> dict:
-    """Signals of every (variant, index of the measurement); failed runs map to None."""
+             measurements: Sequence[Measurement], label: str = "model",
+             errors: dict | None = None) -> dict:
+    """Signals of every (variant, index of the measurement); failed runs map to None, and
+    their reasons (the run store's) to ``errors[(variant, index)]`` when given."""
     specs = {(v, i): spec_for(study, v, m) for v in variants
              for i, m in enumerate(measurements)}
     runner.run(list(specs.values()), label=label)
@@ -80,4 +82,6 @@ def simulate(study: Study, runner: Runner, variants: Sequence[Variant],
     for k, s in specs.items():
         res = runner.load(s.key())
         out[k] = res.signals if res is not None and res.ok else None
+        if out[k] is None and errors is not None:
+            errors[k] = (res.error if res is not None else None) or "no result stored"
     return out

@@ -161,11 +161,12 @@ def write_augment_report(study, result: dict, path, comparisons: dict | None = N
     fig, ax = plt.subplots(figsize=(9, 3.8))
     width = 0.8 / len(tr)
     for i, t in enumerate(tr):
-        per = t["error_per_level"] or [t["error"]]
+        per = t["error_per_level"] or [t["error"]] * len(levels)  # None: its runs failed
         x = np.arange(len(per)) + (i - (len(tr) - 1) / 2) * width
-        ax.bar(x, per, width, label=t["step"])
+        ax.bar(x, [np.nan if e is None else e for e in per], width, label=t["step"])
         for xi, e in zip(x, per, strict=True):
-            ax.text(xi, e, f"{e:.2f}", ha="center", va="bottom", fontsize=7)
+            ax.text(xi, 0 if e is None else e, "failed" if e is None else f"{e:.2f}",
+                    ha="center", va="bottom", fontsize=7)
     ax.set_xticks(np.arange(len(levels)), [f"{lv:.3g}" for lv in levels])
     ax.set_xlabel("level")
     ax.set_ylabel("FRF error (dB RMS)")

@@ -11,6 +11,7 @@ candidate set (every effect at every place) within the issue's budget.
 import json
 import tomllib
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -289,3 +290,29 @@ def test_a_second_round_leaves_out_the_effects_the_model_already_has():
     kept = _hypotheses(augmented, ["dry_friction@beam1"], found, Coordinates([]), said.append,
                        prune=False)
     assert [h.name for h in kept] == ["dry_friction@beam1"]
+
+
+def test_a_candidate_on_an_augmented_model_keeps_the_models_effects():
+    """The run a worker rebuilds for a candidate of the second round is the augmented model
+    plus the candidate (both effects, the parameters of both), not the candidate alone: the
+    first version passed only the candidate's effect to the worker, whose model then refused
+    the first effect's parameters and every run of the round failed."""
+    from sensfw.measure.session import Variant, spec_for
+    from sensfw.measure.synthetic import model_with_effects
+    from sensfw.runs.spec import build_model
+    from sensfw.studyfile import add_effect
+
+    root = Path(__file__).resolve().parents[2]
+    text = add_effect((root / "studies" / "bert.toml").read_text(encoding="utf-8"),
+                      "micro_slip", "joint", {})
+    augmented = Study.from_dict(tomllib.loads(text), "bert")
+    drive = SimpleNamespace(drive=augmented.excitation)  # spec_for reads the drive only
+    variant = Variant.of([{"name": "dry_friction", "attach": "beam1"}],
+                         {"dry_friction_force": 0.3})
+    spec = spec_for(augmented, variant, drive)
+    rebuilt = build_model(spec)
+    names = [(e.name, e.attach) for e in rebuilt.effects]
+    assert names == [("micro_slip", "joint"), ("dry_friction", "beam1")]
+    assert set(rebuilt.parameters()) == set(model_with_effects(
+        augmented, variant.effect_specs).parameters())
+    assert {"microslip_residual", "dry_friction_force"} <= set(spec.params)
