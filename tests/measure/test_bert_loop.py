@@ -2,10 +2,11 @@
 UNESP-BERT (``../shared/data/bert``; skipped when absent), six amplifier levels 0.05-0.30 V.
 
 The calibrations themselves (``sensfw calibrate`` at 0.05 V: 64 simulations, 3.5 minutes on
-2 cores; ``sensfw diagnose`` and ``sensfw augment`` on 0.05, 0.15 and 0.30 V: 27 and 17
-minutes) are too slow for the suite; their results are stored here (``LINEAR`` and
-``AUGMENTED``, README "worked example") and the tests run what follows from them: ``sensfw
-compare`` of the calibrated linear and augmented models on all six levels.
+2 cores; ``sensfw diagnose`` and ``sensfw augment`` on 0.05, 0.15 and 0.30 V: 28 and 14
+minutes for the first round, 44 and 22 for the second) are too slow for the suite; their
+results are stored here (``LINEAR``, ``AUGMENTED``, ``AUGMENTED2``; README "worked
+example") and the tests run what follows from them: ``sensfw compare`` of the calibrated
+linear and augmented models on all six levels.
 """
 
 from __future__ import annotations
@@ -110,24 +111,26 @@ def test_micro_slip_has_a_lever_from_the_calibrated_joint():
 
 #: micro_slip@joint and the base variables as ``sensfw augment`` calibrated them on the
 #: 0.05, 0.15 and 0.30 V records, started from ``sensfw diagnose`` (README, worked example)
-AUGMENTED = {"excitation_gain": 56.00414709072674,
-             "clamp_stiffness": 43857.09842133471,
-             "joint_stiffness": 10000000.0,
-             "damping_ratio": 0.005863354549286196,
-             "microslip_residual": 0.010490314842437629,
-             "microslip_force": 783.9999583995501,
-             "microslip_exponent": -0.18915831950822082}
+AUGMENTED = {"excitation_gain": 56.44588735429049,
+             "clamp_stiffness": 50196.564383352146,
+             "joint_stiffness": 9316438.496776246,
+             "damping_ratio": 0.006178238766704232,
+             "microslip_residual": 0.011327077278339391,
+             "microslip_force": 766.1277256619672,
+             "microslip_exponent": -0.35974676134868544}
 
 
-def augmented_study(tmp, values: dict) -> Path:
-    """studies/bert.toml with micro_slip at the joint and ``values`` as nominal values (what
-    augment writes)."""
+def augmented_study(tmp, values: dict,
+                    effects: tuple = (("micro_slip", "joint"),)) -> Path:
+    """studies/bert.toml with ``effects`` and ``values`` as nominal values (what augment
+    writes)."""
     import tomllib
 
     from sensfw.studyfile import add_effect
 
-    text = add_effect((ROOT / "studies" / "bert.toml").read_text(encoding="utf-8"),
-                      "micro_slip", "joint", {})
+    text = (ROOT / "studies" / "bert.toml").read_text(encoding="utf-8")
+    for name, place in effects:
+        text = add_effect(text, name, place, {})
     params = Study.from_dict(tomllib.loads(text), "bert").parameters
     path = tmp / "augmented.toml"
     path.write_text(set_nominals(text, values, {k: (params[k].min, params[k].max)
@@ -145,13 +148,14 @@ def augmented(bert, cli, tmp_path_factory):
 @pytest.mark.slow
 def test_the_augmented_model_predicts_every_level(linear, augmented):
     """Issue 14's bar on all six levels, three of them (0.10, 0.20, 0.25 V) predicted
-    without refitting: the resonance (compare's peak of the 1/24-octave Hv FRF, 1/16 Hz
-    lines) within 0.5 Hz of the measured one at every level (measured: 0.37, 0.13, 0.25, 0,
-    0, 0.50 Hz), and the laser FRF error over 80-105 Hz at most half the calibrated linear
-    model's above the lowest level (measured 0.77, 0.57, 0.33, 0.22, 0.59 dB against 1.82,
-    2.65, 3.46, 4.19, 4.87). At 0.05 V, the level the linear model was calibrated on, the
-    augmented model's 0.50 dB is 61 % of the linear model's 0.82 dB (the bar's half is not
-    met there: README); the test holds it below 70 %."""
+    without refitting, for the first round (micro_slip@joint): the resonance (compare's peak
+    of the 1/24-octave Hv FRF, 1/16 Hz lines) within 0.5 Hz of the measured one at every
+    level (measured: 0.37, 0.13, 0.25, 0, 0, 0.50 Hz), and the laser FRF error over 80-105 Hz
+    at most half the calibrated linear model's above the lowest level (measured 0.78, 0.57,
+    0.32, 0.22, 0.63 dB against 1.82, 2.65, 3.46, 4.19, 4.87). At 0.05 V, the level the
+    linear model was calibrated on, micro-slip alone gives 0.49 dB, 60 % of the linear
+    model's 0.82 dB (the second round's drive-point friction meets the half there: below);
+    the test holds it below 70 %."""
     lin = {round(c["level"], 2): c for c in linear["levels"]}
     for c in augmented["levels"]:
         level = round(c["level"], 2)
@@ -160,3 +164,44 @@ def test_the_augmented_model_predicts_every_level(linear, augmented):
         assert abs(res["model_hz"] - res["measured_hz"]) <= 0.5 + 1e-9, (level, res)
         err, err_lin = (x["frf_error_db"]["rms_in_band"] for x in (c, lin[level]))
         assert err <= (0.7 if level == 0.05 else 0.5) * err_lin, (level, err, err_lin)
+
+
+#: the second round: ``sensfw diagnose`` of the micro-slip study on the same three levels
+#: names Coulomb friction at the shaker's drive point (dry_friction@beam1) and ``sensfw
+#: augment`` calibrates it with the seven parameters of the first round (README)
+AUGMENTED2 = {"excitation_gain": 55.14400290635046,
+              "clamp_stiffness": 22445.563091436146,
+              "joint_stiffness": 8772824.664864901,
+              "damping_ratio": 0.005957605086537058,
+              "microslip_force": 887.4686832208563,
+              "microslip_exponent": -0.6540052126823261,
+              "microslip_residual": 0.013854410605406056,
+              "dry_friction_force": 0.5184444838314798,
+              "dry_friction_stiffness": 10.335684361846223}
+
+
+@pytest.fixture(scope="module")
+def augmented2(bert, cli, tmp_path_factory):
+    """compare.json of the second round's model on the six levels, 80-105 Hz error band."""
+    tmp = tmp_path_factory.mktemp("bert_augmented2")
+    study = augmented_study(tmp, AUGMENTED2, (("micro_slip", "joint"),
+                                              ("dry_friction", "beam1")))
+    return compare_six_levels(cli, bert, study, tmp / "cmp")
+
+
+@pytest.mark.slow
+def test_the_second_round_meets_the_bar_at_every_level(linear, augmented2):
+    """Issue 14's bar, all of it, after the second round (micro-slip at the joint and
+    friction at the drive point, calibrated on 0.05, 0.15 and 0.30 V; 0.10, 0.20 and 0.25 V
+    predicted): at every level the resonance within 0.5 Hz of the measured one (measured:
+    0, -0.19, +0.31, 0, 0, +0.25 Hz) and the laser FRF error over 80-105 Hz at most half
+    the calibrated linear model's (measured 0.30, 0.65, 0.57, 0.38, 0.31, 0.54 dB against
+    0.82, 1.82, 2.65, 3.46, 4.19, 4.87)."""
+    lin = {round(c["level"], 2): c for c in linear["levels"]}
+    assert sorted(lin) == [round(c["level"], 2) for c in augmented2["levels"]]
+    for c in augmented2["levels"]:
+        level = round(c["level"], 2)
+        res = resonance(c)
+        assert abs(res["model_hz"] - res["measured_hz"]) <= 0.5 + 1e-9, (level, res)
+        err, err_lin = (x["frf_error_db"]["rms_in_band"] for x in (c, lin[level]))
+        assert err <= 0.5 * err_lin, (level, err, err_lin)
