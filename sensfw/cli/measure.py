@@ -254,6 +254,9 @@ def augment(
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
     start_from: Annotated[Path | None, typer.Option(
         help="diagnose.json: start from the values diagnose found for this effect")] = None,
+    budget: Annotated[int, typer.Option(
+        help="points of the calibrations, each simulated at every level: a third for "
+             "the base variables, half for the joint calibration")] = 200,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -280,7 +283,7 @@ def augment(
                   read_also=read_also) as runner:
         result = augment_module.augment(study, meas, runner, name, attach or None,
                                         start=start, base_start=base_start,
-                                        log=say)
+                                        budget=budget, log=say)
     declared = {p.name: p for p in effects.get(name)().parameters()}
     calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
                   for k, v in result["params"].items()}

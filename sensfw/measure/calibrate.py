@@ -170,7 +170,9 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
     """Minimise ``chi2`` over ``coords`` from ``start`` (an evaluated point: its ``values``
     hold every axis, plus any ``fixed`` values passed through unchanged). ``evaluate`` maps
     a list of value dicts to weighted residual vectors (one batch of parallel runs).
-    ``budget`` caps the number of simulations; ``max_iter`` the number of Jacobians.
+    ``budget`` caps the number of points evaluated (one simulation per point and level: a
+    calibration on three levels runs three times as many); ``max_iter`` the number of
+    Jacobians.
 
     A Jacobian (``d`` runs) is computed at each new best point; then pairs of damped
     Gauss-Newton steps (two damping values, run together) are tried until one lowers
@@ -204,7 +206,7 @@ def calibrate(evaluate: Evaluate, coords: Coordinates, start: Evaluation,
     steps = np.full(d, float(step))  # difference step per axis (coded)
     for it in range(max_iter):
         if not affordable(d + 2):
-            log(f"  budget of {budget} simulations reached")
+            log(f"  budget of {budget} points reached (each point simulates every level)")
             break
         z, w = coords.code(fit.best.values), fit.best.w
         pts, h = _jacobian_points(z, steps)

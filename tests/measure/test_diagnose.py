@@ -151,7 +151,7 @@ def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_pat
     assert "data:image/png;base64" in html and "held-out" in html
     proc = cli("augment", study_file, *files, "--effect", "flexible_mode@driveshaft",
                "--start-from", tmp_path / "d" / "diagnose.json", "--out", tmp_path / "a",
-               "--no-progress", timeout=1800)
+               "--budget", 200, "--no-progress", timeout=1800)
     assert proc.returncode == 0, proc.stderr
     aug = json.loads((tmp_path / "a" / "augment.json").read_text())
     steps = {t["step"]: t for t in aug["trajectory"]}
