@@ -312,17 +312,15 @@ def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: 
         if place is not None and place not in fits:
             raise SensfwError(f"candidate {name}@{place}: the model has no place {place!r} "
                               f"that {name} fits ({', '.join(fits)})")
-        if not _allows(cls, found):
-            if prune:
-                log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
-                    "measurement's; left out")
-                continue
-            log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
-                "measurement's; kept (no pruning)")
         clash = sorted({owned[p.name] for p in cls().parameters() if p.name in owned})
         if clash:
             log(f"  {name}: the model has it already ({', '.join(clash)}); left out")
             continue
+        if not _allows(cls, found):
+            log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
+                f"measurement's; {'left out' if prune else 'kept (no pruning)'}")
+            if prune:
+                continue
         for pl in [place] if place else fits:
             eff = cls(attach=pl)
             coords = Coordinates(base_coords.axes + Coordinates.of(None, eff.parameters()).axes)

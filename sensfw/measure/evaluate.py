@@ -72,8 +72,8 @@ class Evaluator:
         errors: dict = {}
         sims = simulate(self.study, self.runner, variants, meas, label, errors)
         self.n_simulations += len(sims)
-        for err in errors.values():
-            self.failures[label] = err
+        if errors:
+            self.failures[label] = list(errors.values())[-1]
         out = []
         for v in variants:
             comps = []

@@ -177,7 +177,7 @@ class EffectLike(Protocol):
 def fitting_places(places: Mapping[str, Place], effect: EffectLike | type) -> list[str]:
     """Names of the places of kinds ``effect`` fits that offer the optional hooks it
     ``needs``, in the model's order."""
-    needs = set(getattr(effect, "needs", ()) or ())
+    needs = set(getattr(effect, "needs", ()))
     return [n for n, pl in places.items() if pl.kind in effect.fits and needs <= pl.offers]
 
 
@@ -192,7 +192,7 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
     out, owners = [], {}
     for eff in effects:
         fits = fitting_places(places, eff)
-        needs = tuple(getattr(eff, "needs", ()) or ())
+        needs = tuple(getattr(eff, "needs", ()))
         if not fits:
             kinds = sorted({pl.kind for pl in places.values()})
             if any(pl.kind in eff.fits for pl in places.values()):
@@ -212,10 +212,12 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
                 raise SensfwError(f"effect {eff.name!r}: say where (attach = ...); it fits "
                                   f"{', '.join(fits)} of model {model!r}")
         elif name not in fits:
-            what = (f"{name!r} is a {places[name].kind}" if name in places
-                    and places[name].kind not in eff.fits
-                    else f"{name!r} does not offer {', '.join(needs)}" if name in places
-                    else f"model {model!r} has no place {name!r}")
+            if name not in places:
+                what = f"model {model!r} has no place {name!r}"
+            elif places[name].kind not in eff.fits:
+                what = f"{name!r} is a {places[name].kind}"
+            else:
+                what = f"{name!r} does not offer {', '.join(needs)}"
             raise SensfwError(f"effect {eff.name!r} cannot attach to {name!r} ({what}); it "
                               f"fits {', '.join(fits)}")
         eff.attach = name
