@@ -251,3 +251,13 @@ def test_cli_messages_keep_square_brackets(tmp_path):
                           env={**os.environ, "COLUMNS": "300"})
     assert proc.returncode == 2
     assert "bad[x].toml" in proc.stderr, proc.stderr
+
+
+@pytest.mark.parametrize("command", ["diagnose", "augment"])
+def test_a_budget_below_one_is_refused_naming_the_option(cli, command):
+    """A calibration budget of 0 would calibrate nothing and report the start as the result;
+    the CLI refuses it before loading anything."""
+    extra = ["--effect", "dry_friction"] if command == "augment" else []
+    proc = cli(command, "studies/bert.toml", "-m", "nowhere.csv", *extra, "--budget", 0)
+    assert proc.returncode != 0
+    assert "--budget" in proc.stderr and "greater than or equal to 1" in proc.stderr

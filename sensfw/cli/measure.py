@@ -183,7 +183,7 @@ def diagnose(
         help="comma-separated effects, NAME or NAME@PLACE (default: every registered effect "
              "at every place it fits)")] = None,
     budget: Annotated[int, typer.Option(
-        help="simulations for the whole diagnosis (H0, screen, calibrations)")] = 300,
+        min=1, help="simulations for the whole diagnosis (H0, screen, calibrations)")] = 300,
     prune: Annotated[bool, typer.Option(
         help="leave out candidates whose signature classes the levels do not show "
              "(--no-prune: try them all)")] = True,
@@ -255,7 +255,7 @@ def augment(
     start_from: Annotated[Path | None, typer.Option(
         help="diagnose.json: start from the values diagnose found for this effect")] = None,
     budget: Annotated[int, typer.Option(
-        help="points of the calibrations, each simulated at every level: a third for "
+        min=1, help="points of the calibrations, each simulated at every level: a third for "
              "the base variables, half for the joint calibration")] = 200,
     workers: Workers = None,
     backend: Backend = None,
