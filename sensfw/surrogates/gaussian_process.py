@@ -20,7 +20,11 @@ class GaussianProcess(SurrogateBase):
     the data range), targets standardised here (``y_mean_``, ``y_scale_``: the fitted
     scikit-learn model works on ``(y - y_mean_) / y_scale_``), ``n_restarts_optimizer``
     restarts of the marginal likelihood optimisation (seeded). ``predict(X, return_std=True)``
-    gives the predictive standard deviation, which includes the fitted noise.
+    gives the predictive standard deviation, which includes the fitted noise. ``kernel``
+    (a fitted ``model_.kernel_``) starts the marginal-likelihood optimisation where a
+    previous fit ended, and ``optimize=False`` keeps its hyperparameters: a surrogate
+    refitted after every few new runs (a calibration's search) needs only its Cholesky
+    factor again.
     ``log_features="auto"`` works on log10 of every input whose range spans a factor 10 or
     more (contact stiffnesses, transition velocities), where a response usually varies
     evenly per decade."""
@@ -31,11 +35,15 @@ class GaussianProcess(SurrogateBase):
         "random_state": ["random_state"],
         "noise": ["boolean"],
         "log_features": [StrOptions({"auto"}), "array-like", None],
+        "kernel": "no_validation",
+        "optimize": ["boolean"],
     }
     loo_method = "closed form (R&W Eq. 5.12)"
 
     def __init__(self, bounds=None, n_restarts_optimizer: int = 3, random_state: int = 0,
-                 noise: bool = True, log_features=None):
+                 noise: bool = True, log_features=None, kernel=None, optimize: bool = True):
+        self.kernel = kernel
+        self.optimize = optimize
         self.bounds = bounds
         self.n_restarts_optimizer = n_restarts_optimizer
         self.random_state = random_state
@@ -77,13 +85,17 @@ class GaussianProcess(SurrogateBase):
         std = float(np.std(y))
         self.y_scale_ = std if std > 10 * np.finfo(float).eps else 1.0
         d = X.shape[1]
-        kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF([0.5] * d, (1e-2, 1e2))
-        if self.noise:
-            kernel = kernel + WhiteKernel(1e-3, (1e-10, 1e0))
+        if self.kernel is not None:  # a fitted kernel (``model_.kernel_``) to start from
+            kernel = self.kernel
+        else:
+            kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF([0.5] * d, (1e-2, 1e2))
+            if self.noise:
+                kernel = kernel + WhiteKernel(1e-3, (1e-10, 1e0))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ConvergenceWarning)
             self.model_ = GaussianProcessRegressor(
                 kernel, normalize_y=False, n_restarts_optimizer=self.n_restarts_optimizer,
+                optimizer="fmin_l_bfgs_b" if self.optimize else None,
                 random_state=self.random_state).fit((X - self.lo_) / self.span_,
                                                     (y - self.y_mean_) / self.y_scale_)
         return self
