@@ -38,7 +38,7 @@ import numpy as np  # noqa: E402
 from scipy.optimize import least_squares  # noqa: E402
 
 from sensfw.measure.compare import compare_measurements  # noqa: E402
-from sensfw.measure.session import Variant, load_measurements  # noqa: E402
+from sensfw.measure.prepared import load_measurements  # noqa: E402
 from sensfw.models.bolted_beam import BoltedBeam  # noqa: E402
 from sensfw.runs import Runner, RunStore  # noqa: E402
 from sensfw.signal import frf, sdof_fit  # noqa: E402
@@ -216,7 +216,7 @@ def main() -> None:
     linear_values = {n: linear[n] for n in names}
     with Runner(RunStore(out / "runs"), workers=args.workers) as runner:
         t0 = time.perf_counter()
-        cmp = compare_measurements(study, meas, runner, Variant.of([], linear_values))
+        cmp = compare_measurements(study, meas, runner, linear_values)
         rows = level_rows(cmp)
         print_rows(f"linear model (calibrated at 0.05 V) simulated with each measured "
                    f"record ({time.perf_counter() - t0:.0f} s):", rows)
@@ -234,7 +234,7 @@ def main() -> None:
             if n not in linear_values or v != linear_values[n]:
                 print(f"  {n} = {v:.5g}")
         t0 = time.perf_counter()
-        cmp = compare_measurements(study, meas, runner, Variant.of(EFFECT, micro))
+        cmp = compare_measurements(study, meas, runner, micro, EFFECT)
         rows2 = level_rows(cmp)
         print_rows(f"linear + micro_slip, every level (fitted on {FIT_LEVELS}, the others "
                    f"predicted; {time.perf_counter() - t0:.0f} s):", rows2)
@@ -265,7 +265,7 @@ def calibrate_microslip(study: Study, meas, runner, linear: dict) -> tuple[dict,
     squares on the resonance frequency and peak of the single-mode fits at the levels
     ``meas`` (every evaluation simulates them with their measured records through the
     runner; the base parameters stay at the linear calibration)."""
-    from sensfw.measure.synthetic import model_with_effects
+    from sensfw.evaluate import model_with_effects
 
     declared = model_with_effects(study, EFFECT).parameters()
     measured = [mode_fit(*laser_frf(m.signals)) for m in meas]
@@ -280,7 +280,7 @@ def calibrate_microslip(study: Study, meas, runner, linear: dict) -> tuple[dict,
 
     def res(z):
         values = {**linear, **{n: unscale(n, v) for n, v in zip(MICRO_NAMES, z, strict=True)}}
-        cmp = compare_measurements(study, meas, runner, Variant.of(EFFECT, values))
+        cmp = compare_measurements(study, meas, runner, values, EFFECT)
         out = []
         for (_, _, sim), mx in zip(cmp.pairs, measured, strict=True):
             mm = mode_fit(*laser_frf(sim))

@@ -38,7 +38,7 @@ def main() -> None:
     args = ap.parse_args()
     from sensfw.measure.diagnose import diagnose
     from sensfw.measure.io import write_csv
-    from sensfw.measure.session import load_measurements
+    from sensfw.measure.prepared import load_measurements
     from sensfw.measure.synthetic import Rig, synthesize
     from sensfw.runs import Runner, RunStore
     from sensfw.study import Study

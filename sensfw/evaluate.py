@@ -1,24 +1,28 @@
-"""Design -> runs -> scores: the one sequence every stage of a study, the design comparison
-and the confirmation runs share.
+"""Design -> runs -> scores: the one sequence every stage of a study, the design comparison,
+the confirmation runs and the measurement loop share.
 
 :func:`evaluate` turns a design (a name with options, a :class:`~sensfw.designs.Design`, or a
 ready run table) into run specs, makes sure each has a result in the run store (through a
 :class:`~sensfw.runs.Runner`, or :class:`~sensfw.runs.StoredRuns`, which never simulates),
 and scores every finished run. Failed runs give NaN rows and an entry in ``failed``.
+The measurement loop (:mod:`sensfw.measure.residuals`) makes its runs with the same
+pieces: :func:`variant_spec` (the study's model with extra effects, driven as a measurement
+says) and :func:`simulate` (specs -> stored runs -> signals or the reasons they failed).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from .errors import AnalysisError
-from .models.base import Signals
+from .errors import AnalysisError, SensfwError
+from .excitation import Excitation
+from .models.base import Model, Signals
 from .params import DesignSpace
 from .runs import RunSpec
 from .study import StageSpec, Study
@@ -36,6 +40,60 @@ class Evaluation:
     reference: Signals | None = None  # the reference run's signals, where scorers need it
     reference_key: str | None = None
     wall: float = 0.0  # wall seconds spent making sure the runs exist
+
+
+def model_with_effects(study: Study, effects: Sequence = ()) -> Model:
+    """The study's model with extra effects (``[{"name": ..., "attach": ...}, ...]`` or
+    :class:`~sensfw.effects.Effect` objects, whose ``attach`` the model resolves), after the
+    effects the study's own model options name."""
+    import inspect
+
+    from .plugins import models
+
+    cls = models.get(study.spec.model.name)
+    options = dict(study.spec.model.options)
+    if effects:
+        if "effects" not in inspect.signature(cls).parameters:
+            raise SensfwError(f"model {study.spec.model.name!r} does not take effects")
+        options["effects"] = [*options.get("effects", []), *effects]
+    return cls(**options)
+
+
+def variant_spec(study: Study, values: Mapping[str, float], excitation: Excitation,
+                 effects: Sequence[Mapping] = ()) -> RunSpec:
+    """The run of the study's model with extra ``effects`` (specs), every parameter at its
+    nominal value but ``values`` (checked against their bounds), driven by ``excitation``.
+    The worker rebuilds the model from the study's reference with the study's own effects
+    followed by ``effects``."""
+    model = model_with_effects(study, effects) if effects else study.model
+    params = study.parameters.nominal()
+    declared = model.parameters()
+    for name in declared:
+        params.setdefault(name, declared[name].nominal)
+    for k, v in values.items():
+        params[k] = (declared[k] if k in declared else study.parameters[k]).check(v)
+    ref = study.model_ref()
+    if effects:
+        ref = {"name": ref["name"], "options": {
+            **ref["options"], "effects": [*ref["options"].get("effects", []),
+                                          *(dict(e) for e in effects)]}}
+    return RunSpec.create(model, params, excitation, study.solver, ref)
+
+
+def simulate(runner, specs: Sequence[RunSpec], label: str = "runs"
+             ) -> tuple[list[Signals | None], list[str | None]]:
+    """Make sure every spec has a stored run (``runner`` simulates the missing ones in
+    parallel) and load them: per spec its signals (None: the run failed) and the reason
+    it failed (the run store's)."""
+    runner.run(list(specs), label=label)
+    signals, errors = [], []
+    for s in specs:
+        res = runner.load(s.key())
+        ok = res is not None and res.ok
+        signals.append(res.signals if ok else None)
+        errors.append(None if ok else (res.error if res is not None else None)
+                      or "no result stored")
+    return signals, errors
 
 
 def make_specs(study: Study, space: DesignSpace, table: pd.DataFrame) -> list[RunSpec]:

@@ -70,22 +70,28 @@ def test_non_ascii_strings_round_trip():
 
 def test_augment_command_writes_the_users_file_with_the_effect(tmp_path, monkeypatch):
     """The command's glue (calibration replaced by a stub: it is tested in
-    tests/measure): study.toml in the output folder is the user's file plus the effect."""
+    tests/measure): study.toml in the output folder is the user's file plus the effect,
+    written by the library (:func:`sensfw.measure.augment.augmented_study`)."""
     from types import SimpleNamespace
 
     from typer.testing import CliRunner
 
     import sensfw.measure.augment
-    import sensfw.measure.session
+    import sensfw.measure.prepared
     import sensfw.report.diagnosis
     from sensfw.cli import app
+    from sensfw.measure.augment import augmented_study
 
     params = {k: v["nominal"] for k, v in calibrated("flexible_mode", 1.2).items()}
-    monkeypatch.setattr(sensfw.measure.session, "load_measurements",
+    monkeypatch.setattr(sensfw.measure.prepared, "load_measurements",
                         lambda study, files: [SimpleNamespace(file=f) for f in files])
-    monkeypatch.setattr(sensfw.measure.augment, "augment",
-                        lambda *a, **k: {"attach": "crankshaft", "params": params,
-                                         "trajectory": [{"step": "calibrated", "error": 1.0}]})
+
+    def stub(study, meas, runner, name, attach, study_text=None, **kw):
+        result = {"effect": name, "attach": "crankshaft", "params": params,
+                  "trajectory": [{"step": "calibrated", "error": 1.0}]}
+        return {**result, "study_text": augmented_study(study_text, study, result, meas)}
+
+    monkeypatch.setattr(sensfw.measure.augment, "augment", stub)
     monkeypatch.setattr(sensfw.report.diagnosis, "write_augment_report", lambda *a, **k: None)
     study = tmp_path / "mine.toml"
     study.write_text("# my study 😀\n" + QUICK, encoding="utf-8")

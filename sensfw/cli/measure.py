@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Annotated
@@ -136,7 +135,7 @@ def compare(
 ) -> None:
     """See where the model fails: FRF error per band, resonances, harmonics, THD, levels."""
     from ..measure.compare import compare_measurements
-    from ..measure.session import load_measurements
+    from ..measure.prepared import load_measurements
     from ..report.measure import write_compare_report
     from ..study import Study
 
@@ -182,8 +181,9 @@ def diagnose(
     candidates: Annotated[str | None, typer.Option(
         help="comma-separated effects, NAME or NAME@PLACE (default: every registered effect "
              "at every place it fits)")] = None,
-    budget: Annotated[int, typer.Option(
-        min=1, help="simulations for the whole diagnosis (H0, screen, calibrations)")] = 300,
+    budget: Annotated[int | None, typer.Option(
+        min=1, help="simulations for the whole diagnosis, one per point and level (default "
+                    "150 + 50 per level)")] = None,
     prune: Annotated[bool, typer.Option(
         help="leave out candidates whose signature classes the levels do not show "
              "(--no-prune: try them all)")] = True,
@@ -193,10 +193,10 @@ def diagnose(
     progress: ShowProgress = True,
 ) -> None:
     """Which effect does the model lack, and where? Recalibrate the base parameters alone and
-    with each candidate; rank by BIC and held-out levels."""
+    with each candidate (global calibrations); rank by BIC and held-out levels."""
     from ..measure.diagnose import diagnose as run_diagnose
-    from ..measure.session import load_measurements
-    from ..report.diagnosis import write_diagnose_report
+    from ..measure.prepared import load_measurements
+    from ..report.diagnosis import write_diagnosis
     from ..study import Study
 
     study = Study.load(study_file)
@@ -206,9 +206,7 @@ def diagnose(
         names = [c.strip() for c in candidates.split(",")] if candidates else None
         result = run_diagnose(study, meas, runner, names, budget=budget, prune=prune,
                               log=say)
-    data = {**result.to_dict(), "wall_s": time.perf_counter() - t0}
-    _json(out_dir / "diagnose.json", data)
-    write_diagnose_report(study, result, out_dir / "report.html")
+    data = write_diagnosis(out_dir, study, result, time.perf_counter() - t0)
     out.print(f"verdict: {result.verdict}  ({result.reason}; {result.n_simulations} "
               f"simulations, {data['wall_s']:.0f} s)")
     h0 = result.rows[0]
@@ -219,30 +217,12 @@ def diagnose(
         flags = f" ({'; '.join(c['flags'])})" if c["flags"] else ""
         out.print(f"    {c['name']} = {c['value']:.4g} {c['unit']} "
                   f"[{c['interval'][0]:.4g}, {c['interval'][1]:.4g}]{flags}")
-    for r in result.ranking[:6]:
+    for r in [r for r in result.ranking if r["surrogate"]][:6]:
         held = "" if r["heldout_chi2_per_entry"] is None else \
             f", held-out chi2/entry {r['heldout_chi2_per_entry']:.2f}"
         out.print(f"  {r['hypothesis']:28s} chi2 {r['chi2']:.1f}, dBIC {r['delta_bic']:+.1f}"
                   f"{held}")
     out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
-
-
-def _diagnosed_values(path: Path, name: str, attach: str) -> tuple[dict, str, dict | None]:
-    """The calibrated values (base variables and effect parameters) and the place of effect
-    ``name`` in a diagnose.json, and the base values of its "parameters only" hypothesis."""
-    try:
-        data = json.loads(path.read_text())
-        ranking = data.get("ranking", [])
-        h0 = (data.get("parameters_only") or {}).get("params")
-        rows = [r for r in ranking
-                if r.get("effect") == name and (not attach or r.get("place") == attach)]
-    except (OSError, ValueError, AttributeError) as err:
-        raise SensfwError(f"{path}: not a readable diagnose.json ({err})") from None
-    if not rows:
-        raise SensfwError(f"{path}: no ranking entry for effect {name!r}")
-    if not isinstance(rows[0].get("params"), dict) or not rows[0].get("place"):
-        raise SensfwError(f"{path}: the entry for {name!r} lacks 'params' or 'place'")
-    return rows[0]["params"], rows[0]["place"], h0 if isinstance(h0, dict) else None
 
 
 @app.command()
@@ -254,9 +234,9 @@ def augment(
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
     start_from: Annotated[Path | None, typer.Option(
         help="diagnose.json: start from the values diagnose found for this effect")] = None,
-    budget: Annotated[int, typer.Option(
-        min=1, help="points of the calibrations, each simulated at every level: a third for "
-             "the base variables, half for the joint calibration")] = 200,
+    budget: Annotated[int | None, typer.Option(
+        min=1, help="simulations of the calibrations, one per point and level (default "
+                    "100 + 60 per level)")] = None,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -264,12 +244,11 @@ def augment(
 ) -> None:
     """Add a physical effect at its place, calibrate it with the base parameters, write the
     augmented study and the error trajectory per level."""
-    from ..measure import augment as augment_module
-    from ..measure.session import load_measurements
-    from ..plugins import effects
-    from ..report.diagnosis import write_augment_report
+    from ..measure.augment import augment as run_augment
+    from ..measure.augment import diagnosed_start
+    from ..measure.prepared import load_measurements
+    from ..report.diagnosis import write_augmentation
     from ..study import Study
-    from ..studyfile import add_effect, set_calibration
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
@@ -277,38 +256,14 @@ def augment(
     start = base_start = None
     read_also = []
     if start_from is not None:
-        start, attach, base_start = _diagnosed_values(start_from, name, attach)
+        start, attach, base_start = diagnosed_start(start_from, name, attach)
         read_also = [start_from.parent / "runs"]  # the diagnosis's runs are reused
     with _running(study, out_dir, workers, backend, scheduler, progress,
                   read_also=read_also) as runner:
-        result = augment_module.augment(study, meas, runner, name, attach or None,
-                                        start=start, base_start=base_start,
-                                        budget=budget, log=say)
-    declared = {p.name: p for p in effects.get(name)().parameters()}
-    calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
-                  for k, v in result["params"].items()}
-    for k, v in result.get("base_parameters", {}).items():
-        p = study.parameters[k]
-        if v != p.nominal:
-            calibrated[k] = {"min": p.min, "nominal": float(v), "max": p.max}
-    jointly = f" jointly with {', '.join(result['variables'])}" if result.get("variables") \
-        else ""
-    note = (f"[augmented with {name}@{result['attach']}, calibrated{jointly} against "
-            f"{', '.join(m.file for m in meas)}]")
-    text = add_effect(study_file.read_text(encoding="utf-8"), name, result["attach"],
-                      calibrated, note)
-    if result.get("variables"):
-        # the effect is part of the model now: a later round (diagnose or augment of this
-        # study) recalibrates its parameters with the base variables
-        text = set_calibration(text, [*result["variables"],
-                                      *(k for k in result["params"]
-                                        if k not in result["variables"])])
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "study.toml").write_text(text, encoding="utf-8")
-    Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
-    comps = result.pop("_comparisons", None)
-    _json(out_dir / "augment.json", result)
-    write_augment_report(study, result, out_dir / "report.html", comps)
+        result = run_augment(study, meas, runner, name, attach or None, start=start,
+                             base_start=base_start, budget=budget,
+                             study_text=study_file.read_text(encoding="utf-8"), log=say)
+    write_augmentation(out_dir, study, result)
     for t in result["trajectory"]:
         if t["error"] is None:
             out.print(f"  {t['step']:20s} its runs failed (see the run store)")
@@ -320,45 +275,32 @@ def augment(
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
 
-
-
 @app.command()
 @_user_errors
 def calibrate(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/calibrate"),
-    budget: Annotated[int, typer.Option(help="simulations for the calibration")] = 120,
+    budget: Annotated[int | None, typer.Option(
+        min=1, help="simulations, one per point and level (default 60 per level)")] = None,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
     progress: ShowProgress = True,
 ) -> None:
-    """Calibrate the study's base parameters (its calibration section) against measurements: values
-    with intervals, the error per level before and after, and the calibrated study."""
-    from ..measure.augment import recalibrate
-    from ..measure.session import load_measurements
-    from ..report.diagnosis import write_calibrate_report
+    """Calibrate the study's base parameters (its calibration section) against measurements:
+    values with intervals, the error per level before and after, and the calibrated study."""
+    from ..measure.prepared import load_measurements
+    from ..measure.recalibrate import recalibrate
+    from ..report.diagnosis import write_calibration
     from ..study import Study
-    from ..studyfile import set_calibration, set_nominals
 
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = recalibrate(study, meas, runner, budget=budget,
-                             log=say)
-    values = {k: v for k, v in result["base_parameters"].items()
-              if v != study.parameters[k].nominal}
-    text = set_nominals(study_file.read_text(encoding="utf-8"), values,
-                        {k: (study.parameters[k].min, study.parameters[k].max)
-                         for k in values})
-    text = set_calibration(text, result["variables"])
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "study.toml").write_text(text, encoding="utf-8")
-    Study.load(out_dir / "study.toml")  # the calibrated file must itself be valid
-    comps = result.pop("_comparisons")
-    _json(out_dir / "calibrate.json", result)
-    write_calibrate_report(study, result, out_dir / "report.html", comps)
+                             study_text=study_file.read_text(encoding="utf-8"), log=say)
+    write_calibration(out_dir, study, result)
     for c in result["calibration"]:
         flags = f" ({'; '.join(c['flags'])})" if c["flags"] else ""
         out.print(f"  {c['name']} = {c['value']:.4g} {c['unit']} "

@@ -1,63 +1,67 @@
 """Add the missing effect at its place and calibrate it jointly with the base parameters: the
-augmented model and the error trajectory per level, nominal model -> base parameters
-recalibrated -> effect added (its nominal values) -> jointly calibrated."""
+augmented model, the augmented study file, and the error trajectory per level, nominal
+model -> base parameters recalibrated -> effect added (its nominal values) -> jointly
+calibrated. Both calibrations are the global ones of :mod:`sensfw.measure.calibration`;
+``budget`` counts simulations (one per point and level), as for diagnosis."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 from ..errors import SensfwError
+from ..evaluate import model_with_effects
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
-from . import discrepancy
-from .calibrate import Coordinates, Evaluation, calibrate
-from .diagnose import (
-    Hypothesis,
-    Log,
-    _calibrate_candidate,
-    calibration_variables,
-    widen_for_roughness,
-)
-from .evaluate import Evaluator
+from ..studyfile import add_effect, set_calibration
+from .calibration import Coordinates
+from .diagnose import _around, calibrate_hypothesis, workers_of
+from .hypotheses import Hypothesis, calibration_variables, neutral_values
 from .io import Measurement
-from .screening import neutral_values, screen
-from .synthetic import model_with_effects
+from .residuals import Residuals
+from .scatter import widen_for_roughness
+
+
+def default_budget(n_levels: int) -> int:
+    """Simulations of an augmentation when none is given: 100 + 60 per level."""
+    return 100 + 60 * n_levels
 
 
 def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, effect: str,
             attach: str | None = None, start: Mapping[str, float] | None = None,
-            base_start: Mapping[str, float] | None = None, budget: int = 200,
-            log: Log = lambda s: None) -> dict:
+            base_start: Mapping[str, float] | None = None, budget: int | None = None,
+            refine: str = "dfols", study_text: str | None = None,
+            log=lambda s: None) -> dict:
     """Calibrate ``effect`` at ``attach`` (default: its preferred place) jointly with the
     study's calibration variables. ``start`` (e.g. the values :func:`diagnose` found: base
-    variables and effect parameters) replaces the screening of the effect's probes;
-    ``base_start`` (e.g. diagnose's "parameters only" values) is where the base variables'
-    own recalibration starts when it is better than their nominal values."""
+    variables and effect parameters) and ``base_start`` (diagnose's "parameters only"
+    values) are simulated first and seed the calibrations. ``study_text`` (default: the
+    study's file) is the text the augmented study is written from (comments and layout
+    kept); the result's ``"study_text"`` is the augmented study."""
     eff = effect_registry.get(effect)(attach=attach)
     model_with_effects(study, [eff])  # resolves (and checks) where it attaches
     names, source = calibration_variables(study, runner, log)
     space = study.calibration_space(names)
-    ev = Evaluator(study, measurements, runner, space)
+    res = Residuals(study, measurements, runner, space)
+    n_levels = res.n_levels
+    budget = default_budget(n_levels) if budget is None else int(budget)
+    q = workers_of(runner)
     base = Coordinates.of(space)
     nominal = space.nominal_row()
-    (nominal_cmp,) = ev.comparisons([ev.variant(None, nominal)], "nominal model")
+    (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
     if nominal_cmp is None:
         raise SensfwError("the study's model failed at the measured level(s)")
     log(f"recalibrating the base variables {', '.join(names)} ({source})")
     h0 = Hypothesis(None, "", base)
-    first = Evaluation(nominal, ev.weighted(nominal_cmp))
     if base_start is not None:
         given = {k: float(base_start[k]) for k in names if k in base_start}
         if given:
-            point = {**nominal, **given}
-            (w,) = ev.evaluate(None, [point], "base start")
-            first = min(first, Evaluation(point, w), key=lambda e: e.chi2)
-    h0.fit = calibrate(lambda pts: ev.evaluate(None, pts, "base calibration"), base, first,
-                       budget=budget // 3, log=log)
-    widen_for_roughness(ev, h0.fit, log)
-    h = Hypothesis(eff, eff.attach, Coordinates(base.axes + Coordinates.of(
-        None, eff.parameters()).axes))
+            res.evaluate(None, [{**nominal, **given}], "base start")
+    h0.fit = calibrate_hypothesis(res, h0, int(0.35 * budget) // n_levels, q=q,
+                                  refine=refine, log=log)
+    widen_for_roughness(res, h0.fit, log)
+    h = Hypothesis(eff, eff.attach, base + Coordinates.of(None, eff.parameters()))
     added = {**h0.fit.values, **{p.name: p.nominal for p in eff.parameters()}}
     if start is not None:
         want = set(h.coords.names)
@@ -65,79 +69,101 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         if missing:
             raise SensfwError(f"start values for {effect} lack {missing}")
         first = {k: float(start[k]) for k in want}
-        (w,) = ev.evaluate(h.spec, [first], f"{effect} start")
+        (w,) = res.evaluate(h.effects, [first], f"{effect} start")
         if w is None:
             raise SensfwError(f"the model with {h.name} failed at the start values: "
-                              f"{ev.failures.get(f'{effect} start', '?')}")
-        h.screen_best = min([Evaluation(first, w),
-                             Evaluation({**h0.fit.values, **neutral_values(eff)}, h0.fit.best.w)],
-                            key=lambda e: e.chi2)
+                              f"{res.failures.get(f'{effect} start', '?')}")
     else:
-        (h0_cmp,) = ev.comparisons([ev.variant(None, h0.fit.values)], "base recalibrated")
-        screen(ev, h0, [h], ev.output_comparisons(h0_cmp), log)
-        if all(e.w is None for e in h.screened):
+        (h0_cmp,) = res.comparisons(None, [h0.fit.values], "base recalibrated")
+        probes = eff.probes(res.output_comparisons(h0_cmp))
+        ws = res.evaluate(h.effects, [{**h0.fit.values, **neutral_values(eff), **p}
+                                      for p in probes], f"probes {h.name}")
+        if all(w is None for w in ws):
             raise SensfwError(f"the model with {h.name} failed at every probe: "
-                              f"{ev.failures.get(f'screen {h.name}', '?')}")
-    log(f"calibrating {h.name} jointly with {', '.join(names)}")
-    _calibrate_candidate(ev, h0, h, budget // 2, log)
+                              f"{res.failures.get(f'probes {h.name}', '?')}")
+    left = (budget - res.n_simulations) // n_levels
+    log(f"calibrating {h.name} jointly with {', '.join(names)} ({left} points)")
+    h.fit = calibrate_hypothesis(res, h, max(left, 2 * h.k + 4), q=q, refine=refine,
+                                 design_box=_around(h0, h), n_design=len(h.own) + 1, log=log)
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),
-             ("effect added", h.spec, added), ("jointly calibrated", h.spec, h.fit.values)]
-    comps = {}
-    trajectory = []
-    for label, spec, values in steps:
-        (c,) = ev.comparisons([ev.variant(spec, values)], label)
-        comps[label] = ev.output_comparisons(c)
-        trajectory.append({"step": label, "error": ev.rms_db(c),
-                           "error_per_level": ev.rms_db_per_level(c),
+             ("effect added", h.effects, added), ("jointly calibrated", h.effects,
+                                                  h.fit.values)]
+    comps, trajectory = {}, []
+    for label, effects, values in steps:
+        (c,) = res.comparisons(effects, [values], label)
+        comps[label] = res.output_comparisons(c)
+        trajectory.append({"step": label, "error": res.rms_db(c),
+                           "error_per_level": res.rms_db_per_level(c),
                            "levels": [m.level for m in measurements],
                            "params": dict(values)})
-    own = {p.name for p in eff.parameters()}
-    summary = h.fit.summary()
-    return {"effect": effect, "attach": eff.attach, "variables": names, "channels": ev.channels,
-            "variables_from": source,
-            "params": {k: v for k, v in h.fit.values.items() if k in own},
-            "base": {k: v for k, v in h.fit.values.items() if k not in own},
-            "base_parameters": space.to_parameters(
-                {k: v for k, v in h.fit.values.items() if k in names}),
-            "calibration": summary, "notes": h.notes, "trajectory": trajectory,
-            "n_simulations": ev.n_simulations,
-            "comparison": {k: [x.to_dict() for x in v] if v else None
-                           for k, v in comps.items()},
-            "_comparisons": comps}
+    own = set(h.own)
+    result = {"effect": effect, "attach": eff.attach, "variables": names,
+              "channels": res.channels, "variables_from": source,
+              "params": {k: v for k, v in h.fit.values.items() if k in own},
+              "base": {k: v for k, v in h.fit.values.items() if k not in own},
+              "base_parameters": space.to_parameters(
+                  {k: v for k, v in h.fit.values.items() if k in names}),
+              "calibration": h.fit.summary(), "trades": h.fit.trades(),
+              "surrogate": h.fit.info.get("surrogate"), "chi2": h.fit.chi2,
+              "notes": h.notes, "trajectory": trajectory,
+              "n_simulations": res.n_simulations, "budget": budget,
+              "comparison": {k: [x.to_dict() for x in v] if v else None
+                             for k, v in comps.items()},
+              "_comparisons": comps}
+    text = study_text if study_text is not None else _source_text(study)
+    if text is not None:
+        result["study_text"] = augmented_study(text, study, result, measurements)
+    return result
 
 
-def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,
-                budget: int = 120, log: Log = lambda s: None) -> dict:
-    """Calibrate the study's base variables alone (hypothesis "parameters" of diagnosis):
-    the calibrated values with intervals and flags, and the error per level before and
-    after."""
-    names, source = calibration_variables(study, runner, log)
-    space = study.calibration_space(names)
-    ev = Evaluator(study, measurements, runner, space)
-    base = Coordinates.of(space)
-    nominal = space.nominal_row()
-    (nominal_cmp,) = ev.comparisons([ev.variant(None, nominal)], "nominal model")
-    if nominal_cmp is None:
-        raise SensfwError("the study's model failed at the measured level(s)")
-    log(f"calibrating {', '.join(names)} ({source})")
-    fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibration"), base,
-                    Evaluation(nominal, ev.weighted(nominal_cmp)), budget=budget, log=log)
-    scatter = widen_for_roughness(ev, fit, log)
-    (cal_cmp,) = ev.comparisons([ev.variant(None, fit.values)], "calibrated")
-    trajectory = [{"step": label, "error": ev.rms_db(c), "error_per_level":
-                   ev.rms_db_per_level(c), "levels": [m.level for m in measurements],
-                   "params": dict(values)}
-                  for label, c, values in (("nominal model", nominal_cmp, nominal),
-                                           ("calibrated", cal_cmp, fit.values))]
-    return {"variables": names, "variables_from": source, "channels": ev.channels,
-            "params": fit.values, "base_parameters": space.to_parameters(fit.values),
-            "calibration": fit.summary(), "chi2": fit.chi2, "n_entries": ev.entries.size(),
-            "fits_noise": discrepancy.fits(fit.best.w, len(base)),
-            "model_scatter_db": scatter,
-            "trajectory": trajectory, "n_simulations": ev.n_simulations,
-            "comparison": {"nominal model": [c.to_dict() for c in
-                                             ev.output_comparisons(nominal_cmp)],
-                           "calibrated": [c.to_dict() for c in
-                                          ev.output_comparisons(cal_cmp)]},
-            "_comparisons": {"nominal model": ev.output_comparisons(nominal_cmp),
-                             "calibrated": ev.output_comparisons(cal_cmp)}}
+def _source_text(study: Study) -> str | None:
+    path = Path(study.source) if study.source else None
+    return path.read_text(encoding="utf-8") if path is not None and path.is_file() else None
+
+
+def augmented_study(text: str, study: Study, result: Mapping, measurements) -> str:
+    """The study file ``text`` with the effect of ``result`` (:func:`augment`) at its place,
+    the calibrated parameters as ``[parameters.NAME]`` tables (bounds kept) and
+    ``[calibration]`` = the base variables and the effect's parameters, so that a next
+    round (diagnose or augment of this study) recalibrates the whole augmented model."""
+    name = result["effect"]
+    declared = {p.name: p for p in effect_registry.get(name)().parameters()}
+    calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
+                  for k, v in result["params"].items()}
+    for k, v in result.get("base_parameters", {}).items():
+        p = study.parameters[k]
+        if v != p.nominal:
+            calibrated[k] = {"min": p.min, "nominal": float(v), "max": p.max}
+    jointly = f" jointly with {', '.join(result['variables'])}" if result.get("variables") \
+        else ""
+    note = (f"[augmented with {name}@{result['attach']}, calibrated{jointly} against "
+            f"{', '.join(m.file for m in measurements)}]")
+    text = add_effect(text, name, result["attach"], calibrated, note)
+    if result.get("variables"):
+        text = set_calibration(text, [*result["variables"],
+                                      *(k for k in result["params"]
+                                        if k not in result["variables"])])
+    return text
+
+
+def diagnosed_start(path, name: str, attach: str | None = None
+                    ) -> tuple[dict, str, dict | None]:
+    """The calibrated values (base variables and effect parameters) and the place of effect
+    ``name`` (at ``attach``, if given) in a ``diagnose.json``, and the base values of its
+    "parameters only" hypothesis: where :func:`augment` starts."""
+    import json
+
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+        ranking = data.get("ranking", [])
+        h0 = (data.get("parameters_only") or {}).get("params")
+        rows = [r for r in ranking
+                if r.get("effect") == name and (not attach or r.get("place") == attach)]
+    except (OSError, ValueError, AttributeError) as err:
+        raise SensfwError(f"{path}: not a readable diagnose.json ({err})") from None
+    if not rows:
+        raise SensfwError(f"{path}: no ranking entry for effect {name!r}")
+    if not isinstance(rows[0].get("params"), dict) or not rows[0].get("place"):
+        raise SensfwError(f"{path}: the entry for {name!r} lacks 'params' or 'place'")
+    return rows[0]["params"], rows[0]["place"], h0 if isinstance(h0, dict) else None

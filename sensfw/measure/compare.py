@@ -510,19 +510,20 @@ class Comparison:
                 "amplitude_dependence": self.amplitude, "notes": self.notes}
 
 
-def compare_measurements(study, measurements, runner, variant=None) -> Comparison:
-    """Simulate the study's model (with ``variant``: effects, parameter values) for every
-    prepared measurement (:func:`sensfw.measure.session.load_measurements`) and compare."""
+def compare_measurements(study, measurements, runner, values=None, effects=()) -> Comparison:
+    """Simulate the study's model (with extra ``effects`` and parameter ``values``) for
+    every prepared measurement (:func:`sensfw.measure.prepared.load_measurements`) and
+    compare."""
     from ..errors import SensfwError
-    from .session import Variant, simulate
+    from ..evaluate import simulate, variant_spec
 
-    variant = variant or Variant()
-    sims = simulate(study, runner, [variant], measurements)
+    specs = [variant_spec(study, dict(values or {}), m.drive, effects) for m in measurements]
+    sims, _ = simulate(runner, specs, "model")
     ex = study.excitation
     levels, pairs, notes = [], [], []
     for i, m in enumerate(measurements):
         notes += [f"{m.file}: {n}" for n in m.notes]
-        sig = sims[(variant, i)]
+        sig = sims[i]
         if sig is None:
             raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
                               f"{m.input_unit}); its error is in the run store")

@@ -2,253 +2,230 @@
 
 On a real rig the base parameters are never at their nominal values: a missing effect and
 wrong parameters are confounded (Brynjarsdottir & O'Hagan 2014), and the best fit is not the
-right physics unless every hypothesis gets the same chance to recalibrate. So:
+right physics unless every hypothesis is calibrated to its own optimum. The diagnosis reads
+top-down:
 
-1. **H0, "parameters only"**: the study's calibration variables (``[calibration]``, or every
-   variable its screen ranks above the threshold) are calibrated against the measurements
-   (:func:`sensfw.measure.calibrate.calibrate`), from the nominal values with fine and,
-   budget permitting, with coarse differences (``H0_COARSE_STEP``). If H0 leaves residuals
-   that the measurement's noise explains (chi-square test,
-   :mod:`sensfw.measure.discrepancy`), the verdict is **"parameters"**.
-2. **Candidates**: every effect at every place of the model it fits, pruned by the signature
-   classes of the measured amplitude dependence where several levels are measured
-   (:mod:`sensfw.measure.signatures`), then screened cheaply: from H0's calibrated point each
-   is simulated at its probe values (the neutral values make it vanish exactly), and the
-   chi-square it could reach along the line from H0 to the probe is its screening score.
-3. The best ``refine`` candidates are **calibrated jointly** with the base variables, from
-   the best of H0 and their probes (so no candidate ends worse than H0). An effect
-   parameter that ends on a bound other than its neutral value gets a second start from
-   the other side before it is reported as on its bound.
-4. **Ranking**: BIC (``chi2 + k ln n``) and, with two or more levels, the held-out-level
-   error: each level is left out in turn, the calibration moved to fit the others (one
-   Gauss-Newton step with the Jacobian of the joint fit) and the left-out level predicted
-   by simulation. The verdict is the best effect when it beats H0 by ``min_delta_bic`` and
-   (with several levels) predicts the held-out levels better; otherwise **"none"**.
+1. **hypotheses** (:mod:`.hypotheses`): H0, "parameters only" (the study's calibration
+   variables), and every candidate effect at every place it fits, pruned by the signature
+   classes of the measured amplitude dependence;
+2. **calibration** (:mod:`.calibration`): H0 globally (design, residual surrogate, DFO-LS);
+   then a screen of the candidates on the level H0 misfits most (:mod:`.screening`: first
+   look, second look, each candidate's surrogate seeded with H0's runs at its neutral
+   values); then the most promising candidates globally at every level, again seeded with
+   H0's runs; H0 is tried again from every calibrated candidate's base values;
+3. **ranking** (:mod:`.ranking`): BIC, held-out levels, ties and trades, the verdict.
+
+``budget`` counts simulations (one per point and level) for all of it: about 30 % for H0,
+30 % for the screen (on one level), the rest for the candidates' calibrations; what a phase
+leaves flows to the next. The held-out predictions (one per level and calibrated
+hypothesis) and the model-scatter runs (``2 d``) come on top.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import SensfwError
-from ..models.places import fitting_places
-from ..plugins import effects as effect_registry
-from ..runs import Runner
+from ..runs import Runner, default_workers
 from ..study import Study
 from . import discrepancy, signatures
-from .calibrate import Coordinates, Evaluation, Fit, calibrate, roughness
-from .evaluate import Evaluator
+from .calibration import Coordinates, Fit, Trial, calibrate
+from .hypotheses import Hypothesis, calibration_variables
+from .hypotheses import candidates as candidate_hypotheses
 from .io import Measurement
-from .screening import neutral_values, other_start, screen
-from .synthetic import model_with_effects
+from .ranking import TIE_BIC, heldout, verdict
+from .residuals import Residuals
+from .scatter import widen_for_roughness
+from .screening import screen, screening_level
 
 Log = Callable[[str], None]
 
 
-def calibration_variables(study: Study, runner: Runner, log: Log = lambda s: None
-                          ) -> tuple[list[str], str]:
-    """The base variables to calibrate and where they come from: ``[calibration]
-    parameters``, else every variable the first stage's screen ranks above its threshold
-    (the screen runs through the run store, so it is reused when it exists)."""
-    cal = study.spec.calibration
-    if cal is not None and cal.parameters:
-        return list(cal.parameters), "[calibration] parameters"
-    stage = study.stages[0]
-    if stage.select is None:
-        raise SensfwError("diagnosis needs the base parameters to calibrate: add "
-                          "[calibration] parameters = [...] to the study, or a screening "
-                          "first stage with a [select]")
-    from ..pipeline import run_stage
-
-    log(f"screen {stage.name!r} for the calibration variables")
-    res = run_stage(study, stage, runner, {})
-    imp = res.screening.importance
-    names = [n for n in imp.sort_values(ascending=False).index
-             if imp[n] >= stage.select.threshold]
-    return names, f"screen {stage.name!r} above {stage.select.threshold:.0%}"
+def default_budget(n_levels: int) -> int:
+    """Simulations of a diagnosis when none is given: 150 + 50 per level (each calibration
+    point simulates every level; the screen runs on one)."""
+    return 150 + 50 * n_levels
 
 
-@dataclass
-class Hypothesis:
-    """H0 (``effect is None``) or an effect at a place, with its calibration."""
-
-    effect: object | None
-    place: str
-    coords: Coordinates
-    fit: Fit | None = None
-    screen_chi2: float = math.inf
-    heldout: float | None = None
-    notes: list[str] = field(default_factory=list)
-    screen_best: Evaluation | None = None
-    screened: list[Evaluation] = field(default_factory=list)
-
-    @property
-    def name(self) -> str:
-        return "parameters" if self.effect is None else f"{self.effect.name}@{self.place}"
-
-    @property
-    def spec(self) -> dict | None:
-        return None if self.effect is None else self.effect.spec()
-
-    @property
-    def k(self) -> int:
-        return len(self.coords)
-
-    def row(self, n: int, h0: Hypothesis | None) -> dict:
-        fit = self.fit
-        chi2 = fit.chi2
-        out = {"hypothesis": self.name,
-               "effect": None if self.effect is None else self.effect.name,
-               "place": self.place or None, "k": self.k, "chi2": chi2,
-               "chi2_per_entry": chi2 / n, "bic": chi2 + self.k * math.log(n),
-               "fits_noise": discrepancy.fits(fit.best.w, self.k),
-               "heldout_chi2_per_entry": self.heldout,
-               "params": fit.values, "calibration": fit.summary(),
-               "n_evaluations": len(fit.evaluations), "notes": self.notes}
-        if h0 is not None and h0.fit is not None:
-            out["delta_bic"] = (h0.fit.chi2 + h0.k * math.log(n)) - out["bic"]
-        return out
+def workers_of(runner: Runner) -> int:
+    return max(2, int(runner.workers or default_workers()))
 
 
-#: difference step of H0's second search (coded units, a tenth of the range; refined by
-#: halving). The base parameters start far from where the measurement puts them and the
-#: discrepancy of a stick-slip model has narrow curved valleys (slide stiffness trades
-#: against the friction band and damping); which step finds the deeper one depends on the
-#: case (bench/diagnose.py, offsets: the 5 % step crept into chi2 56, the true values give
-#: 9.7 and the 20 % step finds 8.0; offsets + mode: the 20 % step stalls at 7100)
-H0_COARSE_STEP = 0.2
-
-
-def _calibrate_h0(ev: Evaluator, coords: Coordinates, start: Evaluation, budget: int,
-                  log: Log) -> Fit:
-    """H0 from the nominal values twice: with the candidates' fine differences, then, with
-    what is left of ``budget`` (simulations: one per point and level), with coarse ones
-    (``H0_COARSE_STEP``); the better stands (both searches' evaluations are kept for the
-    reweighting and the intervals)."""
-    def evaluate(pts):
-        return ev.evaluate(None, pts, "H0 calibration")
-
-    fine = calibrate(evaluate, coords, start, budget=budget, log=log)
-    left = budget // ev.n_levels - (len(fine.evaluations) - 1)  # points left
-    if left < 2 * len(coords) + 4:
-        return fine
-    log(f"H0 again with coarse differences ({H0_COARSE_STEP:g} of the coded range)")
-    coarse = calibrate(evaluate, coords, start, budget=left, step=H0_COARSE_STEP, log=log)
-    best, other = (coarse, fine) if coarse.chi2 < fine.chi2 else (fine, coarse)
-    log(f"H0: chi2 {fine.chi2:.4g} (fine), {coarse.chi2:.4g} (coarse)")
-    best.evaluations = best.evaluations + other.evaluations[1:]  # [0]: the shared start
-    return best
+def calibrate_hypothesis(res: Residuals, h: Hypothesis, budget: int, *,
+                         levels: list[int] | None = None, q: int = 2, refine: str = "dfols",
+                         design_box=None, n_design=None, global_share: float = 0.6,
+                         log: Log = lambda s: None) -> Fit:
+    """Calibrate ``h`` on ``levels`` (default all) with at most ``budget`` points, its
+    surrogate seeded with every run of its variant so far that covers those levels and,
+    for a candidate, with H0's runs at the candidate's neutral values (where it vanishes:
+    the same model)."""
+    evidence = res.trials(h.effects, levels)
+    if h.effect is not None:
+        evidence += res.trials(None, levels, extra=h.neutral)
+    evidence = [t for t in evidence if all(n in t.values for n in h.coords.names)]
+    label = f"calibrate {h.name}" + ("" if levels is None else
+                                     f" on level {', '.join(str(i + 1) for i in levels)}")
+    fit = calibrate(lambda pts: res.evaluate(h.effects, pts, label, levels), h.coords,
+                    budget, evidence=evidence, q=q, refine=refine, design_box=design_box,
+                    n_design=n_design, global_share=global_share, log=log)
+    if levels is None and h.fit is not None and h.fit.chi2 < fit.chi2:
+        fit.best, fit.jacobian = h.fit.best, h.fit.jacobian  # never worse than before
+    return fit
 
 
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
-             candidates: Sequence[str] | None = None, refine: int = 3,
-             min_delta_bic: float = 10.0, budget: int = 300, prune: bool = True,
-             log: Log = lambda s: None) -> DiagnoseResult:
+             candidates: Sequence[str] | None = None, final: int = 2,
+             min_delta_bic: float = 10.0, budget: int | None = None, prune: bool = True,
+             refine: str = "dfols", global_phase: bool = True, log: Log = lambda s: None
+             ) -> DiagnoseResult:
     """Diagnose the missing physics (module docstring). ``candidates`` are effect names
-    (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it fits);
-    ``budget`` caps the simulations of the whole diagnosis: H0's calibration takes at most
-    a third, the screen about ten per screened candidate (two each for the first look when
-    there are many, :func:`~sensfw.measure.screening.screen`), the joint calibrations share
-    what is left (each gets at least a few Jacobians); the held-out predictions, one per
-    level and calibrated hypothesis, come on top. ``prune=False`` keeps the candidates whose
-    signature classes the discrepancy does not show (the classes name what the levels
-    reveal, not every mechanism: a friction that takes force off the drive at low levels
-    moves no resonance)."""
+    (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it
+    fits); ``budget`` caps the simulations (default :func:`default_budget`); ``final``
+    candidates at most (and those the channels cannot tell apart from them) are
+    calibrated at every level; ``prune=False`` keeps the candidates whose signature
+    classes the levels do not show (the classes name what the levels reveal, not every
+    mechanism); ``refine`` is the local least-squares method (``"dfols"`` or ``"lm"``,
+    :mod:`.calibration.refine`); ``global_phase=False`` leaves out the design and the
+    surrogate search (a local calibration from the start values, as diagnosis did before:
+    ``bench/recovery.py --method local``)."""
     names, source = calibration_variables(study, runner, log)
     space = study.calibration_space(names)
-    ev = Evaluator(study, measurements, runner, space)
-    base_coords = Coordinates.of(space)
-    nominal_values = space.nominal_row()
-    (nominal_cmp,) = ev.comparisons([ev.variant(None, nominal_values)], "nominal model")
+    res = Residuals(study, measurements, runner, space)
+    n_levels = res.n_levels
+    budget = default_budget(n_levels) if budget is None else int(budget)
+    q = workers_of(runner)
+    opts = {"q": q, "refine": refine} if global_phase else \
+        {"q": q, "refine": refine, "global_share": 0.0, "n_design": 0}
+    base = Coordinates.of(space)
+    nominal = space.nominal_row()
+    (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
     if nominal_cmp is None:
         raise SensfwError("the study's model failed at the measured level(s); nothing to "
                           "compare (see the run store)")
-    n = ev.entries.size()
-    start = Evaluation(nominal_values, ev.weighted(nominal_cmp))
-    log(f"H0: calibrating {', '.join(names)} ({source})")
-    h0 = Hypothesis(None, "", base_coords)
-    h0.fit = _calibrate_h0(ev, base_coords, start, budget // 3, log)
-    scatter = widen_for_roughness(ev, h0.fit, log)
-    (h0_all,) = ev.comparisons([ev.variant(None, h0.fit.values)], "H0")
-    h0_cmp = ev.output_comparisons(h0_all)
-    found = _signature_classes(h0_cmp)
-    hyps = _hypotheses(study, candidates, found, base_coords, log, prune)
+    n = res.entries.size()
+
+    # 1. H0 globally, the model's scatter around it
+    log(f"H0: calibrating {', '.join(names)} ({source}), {budget} simulations in all")
+    h0 = Hypothesis(None, "", base)
+    h0.fit = calibrate_hypothesis(res, h0, int(0.3 * budget) // n_levels, log=log, **opts)
+    scatter = widen_for_roughness(res, h0.fit, log)
+    (h0_all,) = res.comparisons(None, [h0.fit.values], "H0")
+    h0_cmp = res.output_comparisons(h0_all)
+    log(f"H0: chi2 {h0.fit.chi2:.4g} for {n} entries")
+    found = signatures.classes(h0_cmp) if h0_cmp and len(h0_cmp) >= 2 else {}
+    hyps = candidate_hypotheses(study, candidates, found, base, log, prune)
     log(f"{len(hyps)} candidate(s) after the signature classes {sorted(found) or '(none)'}")
-    screen(ev, h0, hyps, h0_cmp, log, nominal_values)
-    ranked = sorted(hyps, key=lambda h: h.screen_chi2)
-    # worth a joint calibration: the screen already gained more than the candidate's
-    # parameters cost in BIC
-    chosen = [h for h in ranked[:refine]
-              if h.screen_chi2 < h0.fit.chi2 - (h.k - h0.k) * math.log(n)]
-    if chosen and discrepancy.fits(h0.fit.best.w, h0.k):  # the verdict is "parameters"
+
+    calibrated: list[Hypothesis] = []
+    if discrepancy.fits(h0.fit.best.w, h0.k):
         log("the recalibrated parameters explain the measurement to its noise: no "
-            "candidate is calibrated")
-        chosen = []
-    for i, h in enumerate(chosen):
-        left = max(budget - ev.n_simulations, 0)
-        share = left // max(len(chosen) - i, 1)
-        if i and share < 2 * h.k + 4:  # the leader is always calibrated, the others in budget
-            h.notes.append("not calibrated: the simulation budget was spent")
-            continue
-        log(f"calibrating {h.name} jointly with the base variables")
-        _calibrate_candidate(ev, h0, h, share, log)
-    chosen = [h for h in chosen if h.fit is not None]
-    lead = min(chosen, key=lambda h: h.fit.chi2) if chosen else None
-    if lead is not None and not discrepancy.fits(lead.fit.best.w, lead.k):
-        # the leader again from its best start on another base: the joint space has
-        # valleys where one base value trades against the effect (a heavier shaft against
-        # a softer friction band), and a second start is cheaper than a wrong verdict
-        # (not needed where the leader already explains the measurement to its noise)
-        left = budget - ev.n_simulations
-        other = other_start(h0, lead)
-        if other is not None and left > 4 * len(lead.coords):
-            log(f"second start for {lead.name}")
-            again = calibrate(lambda pts: ev.evaluate(lead.spec, pts, f"calibrate {lead.name}"),
-                              lead.coords, other, budget=left, log=log)
-            lead.notes.append(f"second start from another base: chi2 {again.chi2:.4g} "
-                              f"(first {lead.fit.chi2:.4g})")
-            if again.chi2 < lead.fit.chi2:
-                again.evaluations = lead.fit.evaluations + again.evaluations
-                lead.fit = again
-    if chosen and budget - ev.n_simulations >= 4 * h0.k:
-        _refresh_h0(ev, h0, chosen, budget - ev.n_simulations, log)
-    for h in ranked:  # screened only: their best evaluated point stands
-        if h.fit is None:
-            h.fit = Fit(coords=h.coords, best=h.screen_best, jacobian=None,
-                        evaluations=[h.screen_best])
-            h.notes.append("screened only (not among the best candidates)")
-        if h.fit.chi2 > h0.fit.chi2:  # at its neutral values a candidate is H0
-            h.fit.best = Evaluation({**h0.fit.values, **neutral_values(h.effect)},
-                                    h0.fit.best.w)
-            h.notes.append("H0 recalibrated ended better: the effect at its neutral values")
-    if len(measurements) >= 2:
-        for h in [h0, *chosen]:
-            h.heldout = _heldout(ev, h, log)
-    verdict, reason = _verdict(h0, chosen, n, min_delta_bic, len(measurements))
+            "candidate is screened")
+    elif hyps:
+        # 2. the race on one level; 3. the finalists at every level
+        level = screening_level(res, h0)
+        room = budget - res.n_simulations
+        if n_levels > 1:  # what the finalists need at every level
+            room -= final * (h0.k + 6) * n_levels
+
+        def on_level(h: Hypothesis, points: int, levels: list[int]) -> Fit:
+            design = {"design_box": _around(h0, h), "n_design": len(h.own) + 1} \
+                if global_phase else {}
+            fit = calibrate_hypothesis(res, h, points, levels=levels, log=log,
+                                       **{**opts, **design})
+            if n_levels == 1:
+                h.fit = fit
+            return fit
+
+        ranked = screen(res, h0, hyps, h0_cmp, level, on_level, max(room, len(hyps)),
+                        log=log)
+        sl = res.level_slices()[level]
+        chi0 = float(np.sum(h0.fit.best.w[sl] ** 2))
+        able = [h for h in ranked if h.screen.get("calibrated", math.inf) +
+                (h.k - h0.k) * math.log(n) < chi0 - min_delta_bic]
+        chosen = able[:final] + [h for h in able[final:] if h.screen["calibrated"] -
+                                 able[0].screen["calibrated"] <= TIE_BIC]
+        for i, h in enumerate(chosen):
+            if n_levels > 1:
+                left = (budget - res.n_simulations) // n_levels
+                share = left // (len(chosen) - i)
+                if i and share < h.k + 3:
+                    h.notes.append("not calibrated at every level: the budget was spent")
+                    continue
+                res.evaluate(h.effects, [{**h0.fit.values, **h.neutral,
+                                          **h.screen["calibrated_point"]}],
+                             f"{h.name} at every level")
+                log(f"calibrating {h.name} at every level ({share} points)")
+                h.fit = calibrate_hypothesis(res, h, max(share, h.k + 3), log=log, **{
+                    **opts, "global_share": 0.3 if global_phase else 0.0, "n_design": 0})
+            log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
+            calibrated.append(h)
+        if calibrated:
+            _refresh_h0(res, h0, calibrated, opts, log)
+    for h in hyps:  # not calibrated: at its neutral values the candidate is H0
+        if h.fit is None or h not in calibrated:
+            h.fit = Fit(h.coords, Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w), None)
+            h.notes.append("screened only (at its neutral values: H0)" if h.screen else
+                           "not screened: H0 explains the measurement to its noise")
+    if n_levels >= 2:
+        for h in [h0, *calibrated]:
+            h.heldout = heldout(res, h)
+    text, reason, named = verdict(h0, calibrated, n, min_delta_bic, n_levels)
     rows = [h0.row(n, None)] + [h.row(n, h0) for h in sorted(hyps, key=lambda h: h.fit.chi2)]
-    winner = next((h for h in chosen if h.name == verdict), None)
     best_all = None
-    if winner is not None:
-        (best_all,) = ev.comparisons([ev.variant(winner.spec, winner.fit.values)], "winner")
+    if named:
+        (best_all,) = res.comparisons(named[0].effects, [named[0].fit.values], "winner")
     return DiagnoseResult(
-        verdict=verdict, reason=reason, variables=names, variables_from=source,
-        channels=ev.channels, rows=rows, n_simulations=ev.n_simulations, n_entries=n,
-        signature_classes=found, nominal=ev.output_comparisons(nominal_cmp),
-        calibrated=h0_cmp, best=ev.output_comparisons(best_all),
-        errors={"nominal": ev.rms_db(nominal_cmp), "parameters": ev.rms_db(h0_all),
-                "best": ev.rms_db(best_all) if best_all else None},
-        criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3,
-                  "model_db": discrepancy.MODEL_DB, "thd_db": discrepancy.THD_DB,
-                  "model_scatter_db": scatter})
+        verdict=text, named=[h.name for h in named], reason=reason, variables=names,
+        variables_from=source, channels=res.channels, rows=rows,
+        n_simulations=res.n_simulations, n_entries=n, signature_classes=found,
+        nominal=res.output_comparisons(nominal_cmp), calibrated=h0_cmp,
+        best=res.output_comparisons(best_all),
+        errors={"nominal": res.rms_db(nominal_cmp), "parameters": res.rms_db(h0_all),
+                "best": res.rms_db(best_all) if best_all else None},
+        criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3, "budget": budget,
+                  "refine": refine, "model_db": discrepancy.MODEL_DB,
+                  "thd_db": discrepancy.THD_DB, "model_scatter_db": scatter},
+        residuals=res)
+
+
+def _around(h0: Hypothesis, h: Hypothesis, half: float = 0.25):
+    """The design box of a candidate's calibration: its own axes over their whole range,
+    the base axes ``half`` (coded) either side of H0's optimum."""
+    z0 = h0.fit.z
+    low = np.concatenate([np.clip(z0 - half, -1, 1), -np.ones(len(h.own))])
+    high = np.concatenate([np.clip(z0 + half, -1, 1), np.ones(len(h.own))])
+    return low, high
+
+
+def _refresh_h0(res: Residuals, h0: Hypothesis, calibrated: Sequence[Hypothesis],
+                opts: dict, log: Log) -> None:
+    """Give "parameters only" the same chance as the candidates: each joint calibration
+    also moved the base variables, and part of its gain may be base values H0's own
+    search missed. H0 is simulated at every calibrated candidate's base values and, if one
+    is better, refined from there (its evidence holds them)."""
+    names = set(h0.coords.names)
+    points = [{k: v for k, v in h.fit.values.items() if k in names} for h in calibrated]
+    ws = res.evaluate(None, points, "H0 at the candidates' base values")
+    best = min((float(w @ w) for w in ws if w is not None), default=math.inf)
+    if best >= h0.fit.chi2:
+        return
+    log(f"H0 again from a candidate's base values (chi2 {h0.fit.chi2:.4g} -> {best:.4g} "
+        "before refining)")
+    old = h0.fit.chi2
+    h0.fit = calibrate_hypothesis(res, h0, 6 * h0.k + 6, log=log,
+                                  **{**opts, "global_share": 0.0, "n_design": 0})
+    h0.notes.append(f"refined again from a candidate's base values: chi2 {old:.4g} -> "
+                    f"{h0.fit.chi2:.4g}")
 
 
 @dataclass
 class DiagnoseResult:
     verdict: str
+    named: list[str]
     reason: str
     variables: list[str]
     variables_from: str
@@ -262,13 +239,15 @@ class DiagnoseResult:
     best: list | None
     errors: dict
     criteria: dict
+    #: the hypotheses' residuals and every trial (for further evaluations; not written)
+    residuals: Residuals | None = None
 
     @property
     def ranking(self) -> list[dict]:
         return [r for r in self.rows if r["effect"] is not None]
 
     def to_dict(self) -> dict:
-        return {"verdict": self.verdict, "reason": self.reason,
+        return {"verdict": self.verdict, "named": self.named, "reason": self.reason,
                 "calibration_variables": self.variables,
                 "calibration_variables_from": self.variables_from,
                 "channels": self.channels,
@@ -280,174 +259,3 @@ class DiagnoseResult:
                                "parameters": [c.to_dict() for c in self.calibrated],
                                "best": [c.to_dict() for c in self.best] if self.best
                                else None}}
-
-
-def _signature_classes(comparisons) -> dict:
-    """The amplitude-dependence classes of the discrepancy (several levels only)."""
-    if comparisons is None or len(comparisons) < 2:
-        return {}
-    return signatures.classes(comparisons)
-
-
-def _allows(cls, found: Mapping) -> bool:
-    return not found or signatures.allows(cls, found)
-
-
-def _hypotheses(study: Study, candidates, found, base_coords: Coordinates, log: Log,
-                prune: bool = True) -> list[Hypothesis]:
-    model = model_with_effects(study, [])
-    places = model.places()
-    # effects the study's model already has (an augmented study): their parameters are the
-    # model's, so the same effect cannot be added again, here or at another place
-    owned = {p.name: f"{e.name}@{e.attach}" for e in getattr(model, "effects", ())
-             for p in e.parameters()}
-    wanted = []
-    for c in candidates or effect_registry.names():
-        name, _, place = c.partition("@")
-        wanted.append((name.strip(), place.strip() or None))
-    out = []
-    for name, place in wanted:
-        cls = effect_registry.get(name)
-        fits = fitting_places(places, cls)
-        if place is not None and place not in fits:
-            raise SensfwError(f"candidate {name}@{place}: the model has no place {place!r} "
-                              f"that {name} fits ({', '.join(fits)})")
-        clash = sorted({owned[p.name] for p in cls().parameters() if p.name in owned})
-        if clash:
-            log(f"  {name}: the model has it already ({', '.join(clash)}); left out")
-            continue
-        if not _allows(cls, found):
-            log(f"  {name}: its signature {sorted(cls.signature_classes)} is not in the "
-                f"measurement's; {'left out' if prune else 'kept (no pruning)'}")
-            if prune:
-                continue
-        for pl in [place] if place else fits:
-            eff = cls(attach=pl)
-            coords = Coordinates(base_coords.axes + Coordinates.of(None, eff.parameters()).axes)
-            out.append(Hypothesis(eff, pl, coords))
-    return out
-
-
-def _calibrate_candidate(ev: Evaluator, h0: Hypothesis, h: Hypothesis, budget: int,
-                         log: Log) -> None:
-    start = h.screen_best
-    h.fit = calibrate(lambda pts: ev.evaluate(h.spec, pts, f"calibrate {h.name}"),
-                      h.coords, start, budget=max(budget, 2 * len(h.coords) + 4), log=log)
-    # an effect parameter on a bound that is not its neutral value: start again from the
-    # other side before reporting it as on its bound
-    z = h.fit.z
-    own = {p.name for p in h.effect.parameters()}
-    for i, a in enumerate(h.coords.axes):
-        if a.name not in own:
-            continue
-        neutral = h.effect.neutral.get(a.name)
-        at = a.decode(z[i])
-        if abs(z[i]) >= 0.98 and not (neutral is not None and math.isclose(at, neutral,
-                                                                         abs_tol=1e-12)):
-            other = dict(h.fit.values)
-            other[a.name] = a.decode(-0.5 * np.sign(z[i]))
-            (w,) = ev.evaluate(h.spec, [other], f"restart {h.name}")
-            again = calibrate(lambda pts: ev.evaluate(h.spec, pts, f"restart {h.name}"),
-                              h.coords, Evaluation(other, w), budget=budget // 2, log=log)
-            h.notes.append(f"{a.name} ended on its bound; restarted from the other side: "
-                           f"chi2 {h.fit.chi2:.4g} vs {again.chi2:.4g}")
-            if again.chi2 < h.fit.chi2:
-                again.evaluations = h.fit.evaluations + again.evaluations
-                h.fit = again
-            break
-    if h.fit.chi2 > h0.fit.chi2:  # cannot happen from the neutral start; guard the claim
-        raise SensfwError(f"internal: {h.name} ended worse than the hypothesis it extends")
-
-
-def widen_for_roughness(ev: Evaluator, fit: Fit, log: Log) -> float:
-    """Add the model's own scatter around ``fit``'s optimum (:func:`calibrate.roughness`)
-    to every entry's standard error, so that no hypothesis is credited with fitting the
-    irregular part of a stick-slip response; the residuals and Jacobian of ``fit`` are
-    reweighted in place. Returns the median scatter (dB)."""
-    sigma = np.array([x for part in ev.entries.sigma for x in part])
-    rough = roughness(lambda pts: ev.evaluate(None, pts, "model scatter"), fit.coords, fit,
-                      sigma)
-    scale = ev.add_scatter(rough)
-    for e in fit.evaluations:
-        if e.w is not None:
-            e.w = e.w * scale
-    if fit.jacobian is not None:
-        fit.jacobian = fit.jacobian * scale[:, None]
-    med = float(np.median(rough)) if len(rough) else 0.0
-    log(f"model scatter around the calibrated point: median {med:.2f} dB, largest "
-        f"{float(np.max(rough, initial=0.0)):.2f} dB")
-    return med
-
-
-def _refresh_h0(ev: Evaluator, h0: Hypothesis, chosen: Sequence[Hypothesis], budget: int,
-                log: Log) -> None:
-    """Give "parameters only" the same chance as the candidates: each joint calibration
-    also moved the base variables, and part of its gain may be base values H0's own
-    search missed. H0 is evaluated at every calibrated candidate's base values (without the
-    effect) and, if one of them is better, calibrated again from there. Otherwise an
-    effect would be credited with what better base values alone achieve."""
-    names = set(h0.coords.names)
-    points = [{k: v for k, v in h.fit.values.items() if k in names} for h in chosen]
-    ws = ev.evaluate(None, points, "H0 at the candidates' base values")
-    starts = [Evaluation(p, w) for p, w in zip(points, ws, strict=True) if w is not None]
-    best = min(starts, key=lambda e: e.chi2, default=None)
-    if best is None or best.chi2 >= h0.fit.chi2:
-        return
-    log(f"H0 again from a candidate's base values (chi2 {h0.fit.chi2:.4g} -> "
-        f"{best.chi2:.4g} before calibrating)")
-    again = calibrate(lambda pts: ev.evaluate(None, pts, "H0 calibration"), h0.coords, best,
-                      budget=budget, log=log)
-    again.evaluations = h0.fit.evaluations + again.evaluations
-    h0.notes.append(f"calibrated again from a candidate's base values: chi2 "
-                    f"{h0.fit.chi2:.4g} -> {again.chi2:.4g}")
-    h0.fit = again
-
-
-def _heldout(ev: Evaluator, h: Hypothesis, log: Log) -> float | None:
-    """Mean held-out chi2 per entry: each level left out in turn, the calibration moved by
-    one Gauss-Newton step fitted to the other levels, the left-out level simulated."""
-    fit = h.fit
-    J, w = fit.jacobian, fit.best.w
-    slices = ev.level_slices()
-    z = fit.z
-    total, count = 0.0, 0
-    for lev, sl in enumerate(slices):
-        keep = np.ones(len(w), bool)
-        keep[sl] = False
-        if J is not None and len(z):
-            Jk, wk = J[keep], w[keep]
-            A = Jk.T @ Jk
-            step = -np.linalg.solve(A + 1e-3 * np.diag(np.maximum(np.diag(A), 1e-12)),
-                                    Jk.T @ wk)
-            zl = np.clip(z + step, -1, 1)
-            values = {**fit.values, **h.coords.decode(zl)}
-        else:
-            values = fit.values
-        (wl,) = ev.evaluate(h.spec, [values], f"held-out level {lev + 1} {h.name}",
-                            levels=[lev])
-        if wl is None:
-            return math.inf
-        total += float(np.sum(wl * wl))
-        count += len(wl)
-    return total / max(count, 1)
-
-
-def _verdict(h0: Hypothesis, chosen: Sequence[Hypothesis], n: int, min_delta_bic: float,
-             n_levels: int) -> tuple[str, str]:
-    bic0 = h0.fit.chi2 + h0.k * math.log(n)
-    if discrepancy.fits(h0.fit.best.w, h0.k):
-        return "parameters", (f"recalibrating the base parameters explains the measurement "
-                              f"to its noise (chi2 {h0.fit.chi2:.1f} for {n} entries)")
-    best, best_bic = None, bic0 - min_delta_bic
-    for h in chosen:
-        bic = h.fit.chi2 + h.k * math.log(n)
-        if bic < best_bic and (n_levels < 2 or h0.heldout is None or
-                               (h.heldout is not None and h.heldout < h0.heldout)):
-            best, best_bic = h, bic
-    if best is None:
-        return "none", ("no candidate explains the discrepancy clearly better than the "
-                        f"recalibrated parameters (dBIC > {min_delta_bic:g}"
-                        + (" and a better held-out level" if n_levels >= 2 else "") + ")")
-    return best.name, (f"dBIC {bic0 - best_bic:.1f} over the recalibrated parameters"
-                       + (f"; held-out chi2/entry {best.heldout:.2f} vs {h0.heldout:.2f}"
-                          if best.heldout is not None and h0.heldout is not None else ""))

@@ -1,127 +1,180 @@
-"""Screening of candidate effects for diagnosis: from which base points each candidate is
-tried, at which probes, and where its joint calibration starts (:mod:`sensfw.measure.diagnose`).
+"""Which candidates deserve a calibration at every level: a race on the level where
+"parameters only" misfits most (one simulation per point instead of one per level), in
+three rounds of successive halving.
+
+1. **First look** — every candidate at its middle probe (:meth:`Effect.probes`) from H0's
+   calibrated base values. With H0's Jacobian the probe gives the linearised joint fit
+   ``min |w0 + J dtheta + c d|`` (``d``: the probe's change of the residuals, ``0 <= c <=
+   2``): what the effect could explain if it acted as the probe shows. The score is the
+   lower of the run's chi2 and that prediction.
+2. **Second look** — the best quarter (at least ``min_second``) at their other probes and
+   at the point the best linearised fit predicts (an effect rarely acts linearly over its
+   range, so several strengths are looked at). Each candidate's residual surrogate
+   (:class:`~sensfw.measure.calibration.ResidualModel`), fitted to its runs and to H0's
+   (which are the candidate's runs at its neutral values: shared evidence), gives its
+   predicted optimum and lower bound for the report.
+3. **Calibration on the level** — the ``keep`` best are calibrated globally on that level
+   (:func:`sensfw.measure.diagnose.calibrate_hypothesis`: design, residual surrogate,
+   DFO-LS), their surrogates seeded with all of the above.
+
+The candidates come back ranked by the chi2 of their calibration on the level, then by
+their score, then by the first look.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import math
+from collections.abc import Callable, Sequence
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from .calibrate import Evaluation
-from .evaluate import Evaluator
+from .calibration import ResidualModel, Trial
+from .calibration.search import lcb_points, surrogate_minimum
+from .hypotheses import Hypothesis
+from .residuals import Residuals
+
+Log = Callable[[str], None]
+#: calibrate one hypothesis on some levels: (h, budget in points, levels) -> Fit
+CalibrateOn = Callable[[Hypothesis, int, list[int]], object]
 
 
-def base_points(h0, nominal: Mapping[str, float] | None, extra: int = 1
-           ) -> list[dict[str, float]]:
-    """Base points to try each candidate from: H0's optimum, the nominal values, and up to
-    ``extra`` points of H0's own search far (in coded distance) from its optimum with a chi2
-    within three times its best. H0 may have bent the base variables to mimic the missing
-    effect (a softer bearing for a heavier shaft); its search passed nearer the true values
-    on its way, and from there the effect can show what it explains."""
-    fit = h0.fit
-    out = [dict(fit.values)]
-    if nominal is not None:
-        out.append(dict(nominal))
-    z_best = fit.z
-    pool = [e for e in fit.evaluations if e.w is not None and e.chi2 <= 3 * fit.chi2]
-    pool.sort(key=lambda e: -float(np.max(np.abs(h0.coords.code(e.values) - z_best))))
-    for e in pool:
-        if len(out) >= 2 + extra:
-            break
-        z = h0.coords.code(e.values)
-        if all(np.max(np.abs(z - h0.coords.code(b))) > 0.1 for b in out):
-            out.append(dict(e.values))
+def screening_level(res: Residuals, h0: Hypothesis) -> int:
+    """The level where H0 leaves the most chi2 per entry: where a missing effect shows."""
+    w = h0.fit.best.w
+    per = [float(np.mean(w[s] ** 2)) for s in res.level_slices()]
+    return int(np.argmax(per))
+
+
+def _linearised(w0: np.ndarray, J: np.ndarray | None, d: np.ndarray, base_z: np.ndarray
+                ) -> tuple[float, np.ndarray, float]:
+    """``min |w0 + J dz + c d|`` over ``dz`` (H0's coded base step) and ``0 <= c <= 2``:
+    predicted chi2, base step, amplitude."""
+    A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
+    x, *_ = np.linalg.lstsq(A, -w0, rcond=None)
+    c = float(np.clip(x[-1], 0.0, 2.0))
+    dz = x[:-1] if J is not None and J.size else np.zeros(0)
+    dz = np.clip(base_z + dz, -1, 1) - base_z
+    r = w0 + (J @ dz if J is not None and J.size else 0.0) + c * d
+    return float(r @ r), dz, c
+
+
+def _scaled_probe(h: Hypothesis, probe: dict, c: float) -> dict:
+    """The probe's effect parameters moved a fraction ``c`` of the way from neutral."""
+    out = {}
+    for a in h.coords.axes:
+        if a.name in probe:
+            n = h.neutral.get(a.name, probe[a.name])
+            out[a.name] = float(np.clip(n + c * (probe[a.name] - n), a.low, a.high))
     return out
 
 
-def screen(ev: Evaluator, h0, hyps: Sequence, h0_cmp, log,
-           nominal: Mapping[str, float] | None = None, keep: int = 6) -> None:
-    """Each candidate at its probes (the neutral values make it vanish) from the base points
-    of :func:`base_points`, and at the point the linearised joint fit predicts from H0: the base
-    variables moved by H0's Jacobian and the effect scaled along the probe's direction, so
-    that they share what they explain (``min |w0 + J0 dtheta + c d|``, ``0 <= c <= 2``).
-    The candidate's score is the lowest chi2 simulated; its best point starts its joint
-    calibration. Costs about ten simulations per candidate.
-
-    More than ``keep`` candidates (every effect at every place: 44 on the shaft model) get a
-    first look of two simulations each, the middle probe from H0's optimum and its
-    linearised joint fit, and only the ``keep`` best of that look are screened fully."""
-    bases = base_points(h0, nominal)
-    for h in hyps:
-        h.screened = []
-    if len(hyps) > keep:
-        for h in hyps:
-            probes = h.effect.probes(h0_cmp)
-            _probe(ev, h0, h, bases[:1], probes[len(probes) // 2:len(probes) // 2 + 1])
-        hyps = sorted(hyps, key=lambda h: h.screen_chi2)[:keep]
-        log(f"  the {keep} best of a first look (one probe from H0, its linearised fit): "
-            f"{', '.join(h.name for h in hyps)}")
-    for h in hyps:
-        _probe(ev, h0, h, bases, h.effect.probes(h0_cmp))
-        if all(e.w is None for e in h.screened):
-            why = ev.failures.get(f"screen {h.name}", "?")
-            h.notes.append(f"every run of the screen failed: {why}")
-            log(f"  screen {h.name}: every run failed ({why})")
-            continue
-        log(f"  screen {h.name}: chi2 {h0.fit.chi2:.4g} -> {h.screen_chi2:.4g}")
-
-
-def _probe(ev: Evaluator, h0, h, bases: Sequence[Mapping[str, float]],
-           probes: Sequence[Mapping[str, float]]) -> None:
-    """``h`` at ``probes`` from ``bases`` and at the linearised joint fit of its best probe
-    from H0's optimum (:func:`screen`); points ``h`` was already screened at are not run
-    again. Updates ``h.screened``, ``h.screen_best`` and ``h.screen_chi2``."""
+def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, level: int,
+           calibrate_on: CalibrateOn, budget: int, keep: int = 3, min_second: int = 4,
+           log: Log = lambda s: None) -> list[Hypothesis]:
+    """Race ``hyps`` on ``level`` with about ``budget`` simulations (module docstring);
+    fills each ``h.screen`` and returns them ranked, most promising first. ``keep``
+    candidates at most are calibrated on the level, with what the looks leave (at least
+    ``6 (d + 1)`` points each are reserved, ``d`` the base variables)."""
+    levels = [level]
+    sl = res.level_slices()[level]
     base = h0.fit.values
-    w0 = h0.fit.best.w
-    J = h0.fit.jacobian
-    neutral = neutral_values(h.effect)
-    done = h.screened
+    w0 = h0.fit.best.w[sl]
+    J0 = None if h0.fit.jacobian is None else h0.fit.jacobian[sl]
+    z0 = h0.coords.code(base)
+    chi0 = float(w0 @ w0)
+    spent0 = res.n_simulations
 
-    def run(points: list[dict]) -> list[Evaluation]:
-        new = [p for p in points if all(p != e.values for e in done)]
-        if new:  # one batch per hypothesis (its effect spec is part of every run)
-            ws = ev.evaluate(h.spec, new, f"screen {h.name}")
-            done.extend(Evaluation(v, w) for v, w in zip(new, ws, strict=True))
-        return [next(e for e in done if e.values == p) for p in points]
+    def left() -> int:
+        return budget - (res.n_simulations - spent0)
 
-    evaluated = run([{**b, **neutral, **probe} for b in bases for probe in probes])
-    from_h0 = [(p, e) for p, e in zip(probes, evaluated[:len(probes)], strict=True)
-               if e.w is not None]
-    predicted = []
-    for probe, e in sorted(from_h0, key=lambda pe: pe[1].chi2)[:1]:  # the best probe
-        d = e.w - w0
-        A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
-        x, *_ = np.linalg.lstsq(A, -w0, rcond=None)
-        c = float(np.clip(x[-1], 0.0, 2.0))
-        z = h0.coords.code(base) + (x[:-1] if J is not None and J.size else 0.0)
-        values = {**h0.coords.decode(np.clip(z, -1, 1)), **{
-            k: clip_to(h.coords.axes[h.coords.names.index(k)],
-                       neutral[k] + c * (v - neutral[k])) for k, v in probe.items()}}
-        predicted.append({**neutral, **probe, **values})
-    if predicted:
-        run(predicted)
-    best = min([Evaluation({**base, **neutral}, w0), *done], key=lambda e: e.chi2)
-    h.screen_chi2, h.screen_best = best.chi2, best
+    reserve = keep * 6 * (h0.k + 1)
+
+    def look(h: Hypothesis, probes: list[dict], label: str) -> None:
+        """Run ``probes`` from H0's optimum and their linearised joint fits; keep the
+        lowest as the candidate's score."""
+        ws = res.evaluate(h.effects, [{**base, **h.neutral, **p} for p in probes],
+                          f"{label} {h.name}", levels)
+        for p, w in zip(probes, ws, strict=True):
+            if w is None:
+                h.notes.append(f"a {label} run failed: "
+                               f"{res.failures.get(f'{label} {h.name}', '?')}")
+                continue
+            lin, dz, c = _linearised(w0, J0, w - w0, z0)
+            chi2 = float(w @ w)
+            s = h.screen
+            s["observed"] = min(s.get("observed", math.inf), chi2)
+            if min(chi2, lin) < s.get("score", math.inf):
+                s["score"] = min(chi2, lin)
+                point = {**h0.coords.decode(z0 + dz), **_scaled_probe(h, p, c)} \
+                    if lin < chi2 else p
+                s["_start"] = {**base, **h.neutral, **point}
+
+    # 1. first look: the middle probe from H0's optimum
+    for h in hyps:
+        h.screen = {}
+        probes = h.effect.probes(h0_cmp)
+        look(h, [probes[len(probes) // 2]], "first look")
+        h.screen["first_look"] = h.screen.get("score", math.inf)
+    ranked = sorted(hyps, key=lambda h: h.screen["first_look"])
+    log(f"  first look (level {level + 1}, H0 chi2 {chi0:.4g}): " + ", ".join(
+        f"{h.name} {h.screen['first_look']:.4g}" for h in ranked[:6]))
+
+    # 2. second look: the other probes and the linearised optimum of the best so far
+    n_second = min(max(min_second, len(hyps) // 4), len(hyps))
+    second = []
+    for h in ranked[:n_second]:
+        if not math.isfinite(h.screen["first_look"]):
+            continue
+        probes = h.effect.probes(h0_cmp)
+        rest = [p for i, p in enumerate(probes) if i != len(probes) // 2]
+        if left() < len(rest) + 1 + reserve:
+            break
+        look(h, rest, "second look")
+        if h.screen["score"] < h.screen["observed"]:  # a linearised point: run it
+            res.evaluate(h.effects, [h.screen["_start"]], f"second look {h.name}", levels)
+        second.append(h)
+    for h in second:
+        _predict(res, h, levels)
+    second.sort(key=lambda h: h.screen["score"])
+    if second:
+        log("  second look: " + ", ".join(
+            f"{h.name} {h.screen['score']:.4g} (surrogate {h.screen['predicted']:.4g}, "
+            f"bound {h.screen['bound']:.4g})" for h in second[:6]))
+
+    # 3. calibration on the level of the best few
+    finalists = second[:keep]
+    for i, h in enumerate(finalists):
+        share = left() // (len(finalists) - i)
+        if share < 2 * h.k + 2:
+            h.notes.append("not calibrated on the screening level: the budget was spent")
+            continue
+        fit = calibrate_on(h, share, levels)
+        h.screen["calibrated"] = fit.chi2
+        h.screen["calibrated_point"] = fit.values
+        log(f"  {h.name} calibrated on level {level + 1}: chi2 {fit.chi2:.4g} "
+            f"({fit.n_points} points)")
+    for h in hyps:
+        h.screen.pop("_start", None)
+    return sorted(hyps, key=lambda h: (h.screen.get("calibrated", math.inf),
+                                       h.screen.get("score", math.inf),
+                                       h.screen["first_look"]))
 
 
-def other_start(h0, h) -> Evaluation | None:
-    """The best screened point of ``h`` whose base values are far (0.2 coded) from those of
-    its calibrated point and of the point its calibration started from (the same start
-    again would repeat the same path)."""
-    base = h0.coords
-    seen = [base.code(h.fit.values), base.code(h.fit.evaluations[0].values)]
-    far = [e for e in h.screened if e.w is not None and
-           all(np.max(np.abs(base.code(e.values) - z)) > 0.2 for z in seen)]
-    return min(far, key=lambda e: e.chi2) if far else None
-
-
-def clip_to(axis, value: float) -> float:
-    return float(np.clip(value, axis.low, axis.high))
-
-
-def neutral_values(effect) -> dict[str, float]:
-    """Effect parameters at their nominal values overridden by the neutral ones."""
-    return {**{p.name: p.nominal for p in effect.parameters()}, **effect.neutral}
-
-
+def _predict(res: Residuals, h: Hypothesis, levels: list[int]) -> None:
+    """The candidate's surrogate on its runs and H0's (at its neutral values): the best
+    run, the predicted optimum and the lowest bound near the runs."""
+    trials: list[Trial] = res.trials(h.effects, levels) + res.trials(None, levels,
+                                                                     extra=h.neutral)
+    trials = [t for t in trials if all(n in t.values for n in h.coords.names)]
+    Z = np.array([h.coords.code(t.values) for t in trials])
+    W = np.array([t.w for t in trials])
+    chi2 = np.sum(W**2, axis=1)
+    with threadpool_limits(limits=1):
+        model = ResidualModel().fit(Z, W)
+        starts = [Z[i] for i in np.argsort(chi2)[:3]]
+        z_opt, predicted = surrogate_minimum(model, starts)
+        near = lcb_points(model, Z, 1, 2.0, 0.0, np.random.default_rng(0))
+        bound = float(model.lcb(np.array([*near, z_opt]), 2.0).min())
+        quality = model.quality()
+    h.screen.update({"predicted": float(predicted), "bound": bound, "surrogate": quality})

@@ -12,7 +12,6 @@ This is how tests and demos make data whose answer is known (``sensfw simulate``
 
 from __future__ import annotations
 
-import inspect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -20,23 +19,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import SensfwError
+from ..evaluate import model_with_effects
 from ..excitation import Excitation, SampledForce, make_excitation
-from ..models.base import Model, Signals
+from ..models.base import Signals
 from ..study import Study
-
-
-def model_with_effects(study: Study, effects: Sequence) -> Model:
-    """The study's model with extra effects (``[{"name": ..., "attach": ...}, ...]`` or
-    :class:`~sensfw.effects.Effect` objects, whose ``attach`` the model resolves)."""
-    from ..plugins import models
-
-    cls = models.get(study.spec.model.name)
-    options = dict(study.spec.model.options)
-    if effects:
-        if "effects" not in inspect.signature(cls).parameters:
-            raise SensfwError(f"model {study.spec.model.name!r} does not take effects")
-        options["effects"] = [*options.get("effects", []), *effects]
-    return cls(**options)
 
 
 def parse_effect(text: str) -> tuple[dict, dict[str, float]]:

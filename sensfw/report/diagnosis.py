@@ -87,6 +87,15 @@ def resonance_levels(pairs: dict[str, list]):
     return fig
 
 
+def _surrogate_cell(q: dict | None) -> str:
+    """The residual surrogate's leave-one-out error per entry (in standard errors of the
+    entries) over its best quarter of runs, and its runs."""
+    if not q:
+        return ""
+    return (f"{q['loo_rms_per_entry_best']:.2f} (all {q['loo_rms_per_entry']:.2f}; "
+            f"{q['runs']} runs)")
+
+
 def write_diagnose_report(study, result, path) -> Path:
     """``result`` is a :class:`sensfw.measure.diagnose.DiagnoseResult`."""
     page = Page(f"sensfw: which physical effect is missing? ({study.name})",
@@ -95,9 +104,15 @@ def write_diagnose_report(study, result, path) -> Path:
            else "note")
     page.p("Every hypothesis recalibrates the base parameters "
            f"({', '.join(result.variables)}, from {result.variables_from}): 'parameters' "
-           "recalibrates them alone; each candidate effect is calibrated jointly with them, "
-           "starting where it vanishes, so it can only end better. The residuals are the "
-           "dB differences per one-third-octave band (and THD) divided by their standard "
+           "recalibrates them alone; each candidate effect is calibrated jointly with them. "
+           "Each calibration is global: a space-filling design, a surrogate of the whole "
+           "residual vector (principal components, one Gaussian process each) that chooses "
+           "new runs by its optimum and its lower confidence bound, then derivative-free "
+           "least squares (DFO-LS) from the best two points. Candidates share evidence: the "
+           "runs of 'parameters' are every candidate's runs where the effect vanishes. The "
+           "candidates are first raced on the level 'parameters' misfits most, the best "
+           "calibrated there and the finalists at every level. The residuals are the dB "
+           "differences per one-third-octave band (and THD) divided by their standard "
            "errors from the measurement's own noise; chi2 is their sum of squares, BIC = "
            "chi2 + k ln n. With several levels each is also judged on levels it was not "
            "calibrated on (held-out chi2 per entry).")
@@ -114,17 +129,35 @@ def write_diagnose_report(study, result, path) -> Path:
         page.p("Signature classes of the discrepancy across levels: "
                + ", ".join(sorted(result.signature_classes)) + " (candidates whose "
                "signatures do not match were left out).")
+    page.p("Surrogate LOO: the leave-one-out error of each hypothesis's residual surrogate "
+           "per entry, in standard errors of the entries (1 = the measurement's noise), "
+           "over its best quarter of runs, where the search ended: well below 1, the "
+           "surrogate saw the optimum's neighbourhood as the runs do; above 1, the search "
+           "there was guided by a surrogate that does not know the response, and the "
+           "calibration rests on the local refinement alone.")
+    calibrated = [r for r in result.rows if r["surrogate"]]
     rows = [{"hypothesis": r["hypothesis"], "k": r["k"],
              "chi2/entry": r["chi2_per_entry"], "ΔBIC": r.get("delta_bic", 0.0),
              "held-out chi2/entry": r["heldout_chi2_per_entry"],
+             "surrogate LOO": _surrogate_cell(r["surrogate"]),
              "effect values": ", ".join(
                  f"{c['name']}={c['value']:.4g}" + (f" ({'; '.join(c['flags'])})"
                                                     if c["flags"] else "")
                  for c in r["calibration"] if c["name"] not in result.variables),
-             "notes": "; ".join(r["notes"])} for r in result.rows]
+             "notes": "; ".join(r["notes"])} for r in calibrated]
     frame = pd.DataFrame(rows).set_index("hypothesis")
-    page.table(frame, highlight=pd.Series([r["hypothesis"] == result.verdict
-                                           for r in result.rows]))
+    page.table(frame, highlight=pd.Series([r["hypothesis"] in result.named
+                                           for r in calibrated]))
+    screened = [r for r in result.rows[1:] if not r["surrogate"] and r["screen"]]
+    if screened:
+        page.p(f"{len(screened)} more candidates were screened on one level only (not "
+               "calibrated); best five by their screen's score (chi2 on that level, the "
+               "lower of a run and its linearised joint fit):")
+        best = sorted(screened, key=lambda r: r["screen"].get("score", np.inf))[:5]
+        page.table(pd.DataFrame([{"hypothesis": r["hypothesis"],
+                                  "first look": r["screen"].get("first_look"),
+                                  "score": r["screen"].get("score")}
+                                 for r in best]).set_index("hypothesis"))
     fig, ax = plt.subplots(figsize=(10, 3.6))
     x = np.arange(len(rows))
     ax.bar(x - 0.2, [r["chi2/entry"] for r in rows], 0.4, label="calibrated (all levels)")
@@ -137,15 +170,17 @@ def write_diagnose_report(study, result, path) -> Path:
     ax.set_ylabel("chi2 per entry")
     ax.legend(fontsize=8)
     ax.grid(True, axis="y", alpha=0.3)
-    page.figure(fig, "Each hypothesis after calibration (1 = what the noise alone leaves).")
-    win = next((r for r in result.rows if r["hypothesis"] == result.verdict
-                and r["effect"] is not None), None)
-    if win is not None:
-        page.h2(f"The winner: {win['hypothesis']}")
+    page.figure(fig, "Each calibrated hypothesis (1 = what the noise alone leaves).")
+    for name in result.named:
+        win = next(r for r in result.rows if r["hypothesis"] == name)
+        page.h2(f"Named: {name}")
         page.table(calibration_table(win["calibration"]))
+        for t in win.get("trades", []):
+            page.note(f"{t['a']} and {t['b']} trade against each other (correlation "
+                      f"{t['correlation']:+.2f}): these data see a combination of them.")
     pairs = {"nominal model": result.nominal, "parameters recalibrated": result.calibrated}
     if result.best is not None:
-        pairs[result.verdict] = result.best
+        pairs[result.named[0]] = result.best
     page.figure(frf_levels(pairs, "FRF per level"), "Measured (black) against the models.")
     if len(result.nominal) >= 2:
         page.figure(resonance_levels({k: v for k, v in pairs.items() if k != "nominal model"}),
@@ -180,6 +215,12 @@ def write_augment_report(study, result: dict, path, comparisons: dict | None = N
                              for t in tr]).set_index("step"))
     page.h2("Calibrated values")
     page.table(calibration_table(result["calibration"]))
+    if result.get("surrogate"):
+        page.p("Residual surrogate of the joint calibration, leave-one-out error per entry "
+               f"(standard errors): {_surrogate_cell(result['surrogate'])}.")
+    for t in result.get("trades", []):
+        page.note(f"{t['a']} and {t['b']} trade against each other (correlation "
+                  f"{t['correlation']:+.2f}): these data see a combination of them.")
     for n in result.get("notes", []):
         page.note(n)
     if comparisons:
@@ -203,6 +244,9 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
            + ("the noise explains what is left." if result["fits_noise"] else
               "more is left than the noise explains."), "ok" if result["fits_noise"] else "note")
     page.table(calibration_table(result["calibration"]))
+    if result.get("surrogate"):
+        page.p("Residual surrogate, leave-one-out error per entry (standard errors): "
+               f"{_surrogate_cell(result['surrogate'])}.")
     page.table(pd.DataFrame([{"level": lv, **{t["step"]: t["error_per_level"][i]
                                               for t in tr}}
                              for i, lv in enumerate(tr[0]["levels"])]).set_index("level"))
@@ -210,3 +254,54 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
         page.figure(frf_levels(comparisons, "FRF per level"), "Measured (black) against the "
                     "nominal and the calibrated model.")
     return page.write(path)
+
+
+def _write_json(path: Path, data) -> None:
+    import json
+
+    from ..pipeline import _jsonable
+
+    path.write_text(json.dumps(_jsonable(data), indent=1))
+
+
+def write_diagnosis(out_dir, study, result, wall_s: float | None = None) -> dict:
+    """``out_dir/diagnose.json`` and ``out_dir/report.html`` of a diagnosis; returns the
+    JSON data."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    data = {**result.to_dict(), "wall_s": wall_s}
+    _write_json(out_dir / "diagnose.json", data)
+    write_diagnose_report(study, result, out_dir / "report.html")
+    return data
+
+
+def write_augmentation(out_dir, study, result: dict) -> None:
+    """``out_dir/study.toml`` (the augmented study, checked to load), ``augment.json`` and
+    ``report.html`` of :func:`sensfw.measure.augment.augment`."""
+    from ..study import Study
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if result.get("study_text") is not None:
+        (out_dir / "study.toml").write_text(result["study_text"], encoding="utf-8")
+        Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
+    comps = result.get("_comparisons")
+    _write_json(out_dir / "augment.json", {k: v for k, v in result.items()
+                                           if k not in ("_comparisons", "study_text")})
+    write_augment_report(study, result, out_dir / "report.html", comps)
+
+
+def write_calibration(out_dir, study, result: dict) -> None:
+    """``out_dir/study.toml`` (the calibrated study), ``calibrate.json`` and ``report.html``
+    of :func:`sensfw.measure.recalibrate.recalibrate`."""
+    from ..study import Study
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if result.get("study_text") is not None:
+        (out_dir / "study.toml").write_text(result["study_text"], encoding="utf-8")
+        Study.load(out_dir / "study.toml")  # the calibrated file must itself be valid
+    comps = result.get("_comparisons")
+    _write_json(out_dir / "calibrate.json", {k: v for k, v in result.items()
+                                             if k not in ("_comparisons", "study_text")})
+    write_calibrate_report(study, result, out_dir / "report.html", comps)

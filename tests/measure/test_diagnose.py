@@ -11,14 +11,13 @@ candidate set (every effect at every place) within the issue's budget.
 import json
 import tomllib
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from sensfw.measure.diagnose import diagnose
 from sensfw.measure.io import write_csv
-from sensfw.measure.session import load_measurements
+from sensfw.measure.prepared import load_measurements
 from sensfw.measure.synthetic import Rig, synthesize
 from sensfw.runs import Runner, RunStore
 from sensfw.study import Study
@@ -199,25 +198,26 @@ def test_discrepancy_along_the_friction_velocity_at_a_stick_slip_setting(study, 
     """How smooth is the discrepancy in a stick-slip parameter? Scan the friction
     transition velocity (the stick band's width, Eq. 3) finely around a low value, where the
     crankshaft sticks and slips within each cycle, and compare the point-to-point scatter of
-    chi2 (second differences) with its trend. The calibration's difference step (5 % of the
-    coded range, :mod:`sensfw.measure.calibrate`) must be well above the scale where the
-    scatter dominates. Calibrating the velocity from a start off by a factor 2 then measures
-    the model's own scatter at its optimum (:func:`~sensfw.measure.calibrate.roughness`)
+    chi2 (second differences) with its trend: over 5 % of the coded range (the scale a
+    calibration's surrogate and local refinement work at) the trend must dominate the
+    scatter. Calibrating the velocity (globally, 20 points) from a start off by a factor 2
+    then measures the model's own scatter at its optimum
+    (:func:`~sensfw.measure.scatter.roughness`)
     and widens the entries' errors by it: the truth must lie inside the widened 95 %
     interval, that interval must exclude the start (the data reject the factor 2), and the
     widened chi2 must be consistent with the noise (the roughness is not left for an effect
     to explain)."""
     from sensfw.measure import discrepancy
-    from sensfw.measure.calibrate import Coordinates, Evaluation, calibrate
-    from sensfw.measure.diagnose import widen_for_roughness
-    from sensfw.measure.evaluate import Evaluator
+    from sensfw.measure.calibration import Coordinates, calibrate
+    from sensfw.measure.residuals import Residuals
+    from sensfw.measure.scatter import widen_for_roughness
 
     truth = 0.25
     sets = {"slide_v_friction": truth, "slide_v_stiction": truth / 10}
     sig, _ = synthesize(study, sets=sets, amplitude=0.1, rig=Rig(noise=0.02, seed=2))
     meas = load_measurements(study, [str(write_csv(tmp_path / "m.csv", sig, level=0.1))])
     space = study.calibration_space(["slide_friction_velocity"])
-    ev = Evaluator(study, meas, runner, space)
+    ev = Residuals(study, meas, runner, space)
     coords = Coordinates.of(space)
     z0 = coords.code({"slide_friction_velocity": truth})[0]
     grid = z0 + np.linspace(-0.1, 0.1, 11)  # 1 % steps of the coded range
@@ -226,13 +226,14 @@ def test_discrepancy_along_the_friction_velocity_at_a_stick_slip_setting(study, 
     trend = np.polyval(np.polyfit(grid, chi2, 2), grid)
     scatter = float(np.std(chi2 - trend))
     # the scatter (the stick-slip roughness plus the noise's chi2 scatter) is small
-    # against the change of chi2 over the calibration's difference step
+    # against the change of chi2 over 5 % of the coded range
     slope = float(np.max(np.abs(np.diff(trend)) / np.diff(grid)))
     assert scatter < 0.25 * slope * 0.05, (scatter, slope, chi2)
     start = {"slide_friction_velocity": 2 * truth}
-    (w,) = ev.evaluate(None, [start], "start")
-    fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibrate"), coords,
-                    Evaluation(start, w))
+    ev.evaluate(None, [start], "start")
+    # the calibration's evidence is the start alone (not the scan around the truth)
+    fit = calibrate(lambda pts: ev.evaluate(None, pts, "calibrate"), coords, 20,
+                    evidence=[t for t in ev.trials() if t.values == start])
     widen_for_roughness(ev, fit, lambda s: None)
     (row,) = fit.summary()
     lo, hi = row["interval"]
@@ -270,8 +271,8 @@ def test_a_second_round_leaves_out_the_effects_the_model_already_has():
     same effect cannot be added again, at its place or another (its parameters are the
     model's), so it is left out with the reason; the other candidates stay, pruned by the
     signature classes unless ``prune=False`` (``--no-prune``)."""
-    from sensfw.measure.calibrate import Coordinates
-    from sensfw.measure.diagnose import _hypotheses
+    from sensfw.measure.calibration import Coordinates
+    from sensfw.measure.hypotheses import candidates
     from sensfw.studyfile import add_effect
 
     root = Path(__file__).resolve().parents[2]
@@ -279,15 +280,15 @@ def test_a_second_round_leaves_out_the_effects_the_model_already_has():
                       "micro_slip", "joint", {})
     augmented = Study.from_dict(tomllib.loads(text), "bert")
     said = []
-    hyps = _hypotheses(augmented, ["micro_slip@joint", "dry_friction"], {}, Coordinates([]),
+    hyps = candidates(augmented, ["micro_slip@joint", "dry_friction"], {}, Coordinates([]),
                        said.append)
     assert [h.name for h in hyps] == ["dry_friction@beam1", "dry_friction@beam2"]
     assert any("micro_slip: the model has it already (micro_slip@joint)" in s for s in said)
     # the classes the levels show prune the candidates, unless told not to
     found = {"even_harmonics": []}
-    assert _hypotheses(augmented, ["dry_friction@beam1"], found, Coordinates([]),
+    assert candidates(augmented, ["dry_friction@beam1"], found, Coordinates([]),
                        said.append) == []
-    kept = _hypotheses(augmented, ["dry_friction@beam1"], found, Coordinates([]), said.append,
+    kept = candidates(augmented, ["dry_friction@beam1"], found, Coordinates([]), said.append,
                        prune=False)
     assert [h.name for h in kept] == ["dry_friction@beam1"]
 
@@ -297,8 +298,7 @@ def test_a_candidate_on_an_augmented_model_keeps_the_models_effects():
     plus the candidate (both effects, the parameters of both), not the candidate alone: the
     first version passed only the candidate's effect to the worker, whose model then refused
     the first effect's parameters and every run of the round failed."""
-    from sensfw.measure.session import Variant, spec_for
-    from sensfw.measure.synthetic import model_with_effects
+    from sensfw.evaluate import model_with_effects, variant_spec
     from sensfw.runs.spec import build_model
     from sensfw.studyfile import add_effect
 
@@ -306,13 +306,11 @@ def test_a_candidate_on_an_augmented_model_keeps_the_models_effects():
     text = add_effect((root / "studies" / "bert.toml").read_text(encoding="utf-8"),
                       "micro_slip", "joint", {})
     augmented = Study.from_dict(tomllib.loads(text), "bert")
-    drive = SimpleNamespace(drive=augmented.excitation)  # spec_for reads the drive only
-    variant = Variant.of([{"name": "dry_friction", "attach": "beam1"}],
-                         {"dry_friction_force": 0.3})
-    spec = spec_for(augmented, variant, drive)
+    effects = [{"name": "dry_friction", "attach": "beam1"}]
+    spec = variant_spec(augmented, {"dry_friction_force": 0.3}, augmented.excitation, effects)
     rebuilt = build_model(spec)
     names = [(e.name, e.attach) for e in rebuilt.effects]
     assert names == [("micro_slip", "joint"), ("dry_friction", "beam1")]
-    assert set(rebuilt.parameters()) == set(model_with_effects(
-        augmented, variant.effect_specs).parameters())
+    assert set(rebuilt.parameters()) == set(model_with_effects(augmented, effects)
+                                            .parameters())
     assert {"microslip_residual", "dry_friction_force"} <= set(spec.params)

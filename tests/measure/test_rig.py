@@ -11,7 +11,7 @@ import pytest
 from sensfw.errors import MeasurementError
 from sensfw.excitation import Chirp, LinearSweep, RandomForce, SampledForce, SteppedSine
 from sensfw.measure.io import load_all, write_csv
-from sensfw.measure.session import load_measurements
+from sensfw.measure.prepared import load_measurements
 from sensfw.measure.synthetic import Rig, synthesize
 from sensfw.signal.sweep import estimate_sweep
 from sensfw.study import Study

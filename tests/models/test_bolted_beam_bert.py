@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sensfw.excitation import LinearSweep
-from sensfw.measure.session import Variant, load_measurements
+from sensfw.measure.prepared import load_measurements
 from sensfw.signal import frf, sdof_fit
 from sensfw.study import Study
 
@@ -60,7 +60,7 @@ def test_the_linear_model_driven_by_the_measured_voltage(measured, tmp_path):
     study = Study.load(BERT)
     pick = [measured[0], measured[-1]]
     with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
-        cmp = compare_measurements(study, pick, runner, Variant.of([], {}))
+        cmp = compare_measurements(study, pick, runner)
     (_, m_lo, s_lo), (_, m_hi, s_hi) = cmp.pairs
     # the model's input channel is the measured voltage (the force is gain x voltage)
     assert np.max(np.abs(s_lo.force)) == pytest.approx(np.max(np.abs(m_lo.force)), rel=0.01)

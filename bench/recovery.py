@@ -1,0 +1,256 @@
+"""How often does diagnosis find the truth? Random synthetic cases on the quick study
+(issue 25), each drawn afresh from its seed:
+
+* an effect and a place drawn from all that fit the shaft model (or, in a quarter of the
+  cases, no effect), its parameters drawn in their calibration coding at 25-100 % of the
+  way from the neutral value to the far bound (parameters without a neutral value anywhere
+  in their range);
+* two or three of the study's calibration variables off nominal by factors drawn in
+  0.6-1.6 (log-uniform, inside their bounds);
+* noise 1-5 % of each channel's RMS, one to three levels from 0.03-0.2 N.
+
+Each case is diagnosed with every candidate (``sensfw diagnose`` without ``--candidates``)
+and the default budget. Printed: the confusion of verdicts, the rate at which the true
+hypothesis's calibrated chi2 is within the noise (``chi2 / n <= 1 + 3 sqrt(2 / n)``),
+simulations and wall time per case. "The data can tell" when, as the verdict's rules have
+it, "parameters only" does not explain the measurement to its noise (the chi-square test
+of :func:`sensfw.measure.discrepancy.fits`) and the true hypothesis at the better of its
+true values and its calibration beats H0's calibrated BIC by the verdict's margin (10);
+then the verdict must name the effect and place (naming it with the same
+effect at another place the channels cannot tell apart counts as right), otherwise it must
+be "parameters" or "none".
+
+``--method`` chooses the calibration: ``dfols`` (global search + DFO-LS, the default of
+``diagnose``), ``lm`` (global search + the former Levenberg-Marquardt) or ``local`` (no
+global phase: Levenberg-Marquardt from the start values, as diagnosis did before issue 25).
+
+    python bench/recovery.py --cases 10 --first 0 --out part0.jsonl   # cases 0..9
+    python bench/recovery.py --cases 10 --first 10 --out part1.jsonl  # cases 10..19
+    python bench/recovery.py --merge part0.jsonl part1.jsonl           # the figures
+
+Runs in parts (each case is one line of its JSONL file, written when it ends), so a long
+benchmark fits in several sessions; ``--merge`` prints the figures of any set of parts.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+# bench/signal.py would shadow the standard library's signal module: drop this folder
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+import tomllib  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+LEVELS = (0.03, 0.05, 0.1, 0.2)
+MARGIN = 10.0
+
+
+def quick_study(short: bool = False):
+    from sensfw.study import Study
+
+    data = tomllib.loads((ROOT / "studies" / "quick.toml").read_text())
+    if short:  # the test suite's settings: a 0.15 s chirp at a 2e-5 s step
+        data["excitation"]["duration"] = "0.15 s"
+        data["solver"]["step"] = "2e-5 s"
+    return Study.from_dict(data, "quick-short" if short else "quick")
+
+
+def draw_case(study, seed: int) -> dict:
+    """One random case (module docstring) from ``seed``."""
+    from sensfw.evaluate import model_with_effects
+    from sensfw.measure.calibration import Coordinates
+    from sensfw.models.places import fitting_places
+    from sensfw.plugins import effects
+
+    rng = np.random.default_rng(seed)
+    model = model_with_effects(study, [])
+    pairs = [(name, place) for name in effects.names()
+             for place in fitting_places(model.places(), effects.get(name))]
+    case: dict = {"seed": seed}
+    if rng.random() < 0.25:
+        case["effect"] = None
+    else:
+        name, place = pairs[int(rng.integers(len(pairs)))]
+        eff = effects.get(name)(attach=place)
+        coords = Coordinates.of(None, eff.parameters())
+        values = {}
+        for a in coords.axes:
+            if a.name in eff.neutral:
+                zn = a.code(eff.neutral[a.name])
+                far = 1.0 if zn <= 0 else -1.0
+                values[a.name] = a.decode(zn + rng.uniform(0.25, 1.0) * (far - zn))
+            else:
+                values[a.name] = a.decode(rng.uniform(-1, 1))
+        case.update(effect=name, place=place, params=values)
+    space = study.calibration_space(list(study.spec.calibration.parameters))
+    k = int(rng.integers(2, 4))
+    chosen = rng.choice(space.names, size=min(k, len(space)), replace=False)
+    base = {}
+    for v in space.variables:
+        if v.name in chosen:
+            f = math.exp(rng.uniform(math.log(0.6), math.log(1.6)))
+            base[v.name] = float(np.clip(v.nominal * f, v.low, v.high))
+    case["base"] = base
+    case["sets"] = space.to_parameters({**space.nominal_row(), **base})
+    case["noise"] = float(rng.uniform(0.01, 0.05))
+    n = int(rng.integers(1, 4))
+    case["levels"] = sorted(float(x) for x in rng.choice(LEVELS, size=n, replace=False))
+    return case
+
+
+def run_case(study, case: dict, method: str, workers: int, log=lambda s: None) -> dict:
+    from sensfw.measure import discrepancy
+    from sensfw.measure.diagnose import diagnose
+    from sensfw.measure.io import write_csv
+    from sensfw.measure.prepared import load_measurements
+    from sensfw.measure.synthetic import Rig, synthesize
+    from sensfw.runs import Runner, RunStore
+
+    tmp = Path(tempfile.mkdtemp(prefix="sensfw-recovery-"))
+    effect = []
+    if case["effect"]:
+        effect = [f"{case['effect']}@{case['place']}:" + ",".join(
+            f"{k}={v!r}" for k, v in case["params"].items())]
+    files = []
+    for i, level in enumerate(case["levels"]):
+        sig, _ = synthesize(study, sets=case["sets"], effects=effect, amplitude=level,
+                            rig=Rig(noise=case["noise"], seed=case["seed"] * 10 + i))
+        files.append(str(write_csv(tmp / f"m{i}.csv", sig, level=level)))
+    meas = load_measurements(study, files)
+    t0 = time.perf_counter()
+    with Runner(RunStore(tmp / "runs"), backend="processes", workers=workers) as runner:
+        res = diagnose(study, meas, runner, log=log, refine="lm" if method != "dfols" else
+                       "dfols", global_phase=method != "local")
+        wall = time.perf_counter() - t0
+        rows = {r["hypothesis"]: r for r in res.rows}
+        n = res.n_entries
+        truth = f"{case['effect']}@{case['place']}" if case["effect"] else "parameters"
+        h0 = rows["parameters"]
+        true_row = rows.get(truth)
+        # the true hypothesis at its true values (not counted in the diagnosis's runs)
+        ev = res.residuals
+        if case["effect"]:
+            spec = [{"name": case["effect"], "attach": case["place"]}]
+            values = {**{k: v for k, v in case_base_values(study, case).items()},
+                      **case["params"]}
+        else:
+            spec, values = None, case_base_values(study, case)
+        (w,) = ev.evaluate(spec, [values], "truth")
+    chi2_truth = float(w @ w) if w is not None else math.inf
+    k_true = true_row["k"] if true_row else h0["k"]
+    chi2_true_cal = true_row["chi2"] if true_row else math.inf
+    best_true = min(chi2_truth, chi2_true_cal)
+    can_tell = bool(case["effect"]) and not h0["fits_noise"] and (
+        best_true + k_true * math.log(n) < h0["bic"] - MARGIN)
+    return {**case, "method": method, "verdict": res.verdict, "named": res.named,
+            "n_entries": n, "chi2_h0": h0["chi2"], "chi2_truth": chi2_truth,
+            "chi2_true_calibrated": chi2_true_cal,
+            "noise_reached": chi2_true_cal / n <= 1 + 3 * math.sqrt(2 / n),
+            "truth_fits_noise": discrepancy.fits(w, k_true) if w is not None else False,
+            "can_tell": can_tell, "simulations": res.n_simulations, "wall_s": wall,
+            "outcome": outcome(case, res.named, res.verdict, can_tell)}
+
+
+def case_base_values(study, case) -> dict:
+    space = study.calibration_space(list(study.spec.calibration.parameters))
+    return {**space.nominal_row(), **case["base"]}
+
+
+def outcome(case: dict, named: list[str], verdict: str, can_tell: bool) -> str:
+    if not case["effect"]:
+        return "correct" if verdict in ("parameters", "none") else "false discovery"
+    effects = {n.split("@")[0] for n in named}
+    truth = f"{case['effect']}@{case['place']}"
+    if not can_tell:
+        return "correct (cannot tell)" if verdict in ("parameters", "none") else \
+            ("named (cannot tell)" if truth in named else "wrong (cannot tell)")
+    if truth in named and effects == {case["effect"]}:
+        return "right"
+    if verdict in ("parameters", "none"):
+        return "missed"
+    if case["effect"] in effects:
+        return "right effect, wrong place"
+    return "wrong effect"
+
+
+def summary(rows: list[dict]) -> None:
+    by = {}
+    for r in rows:
+        by.setdefault(r["method"], []).append(r)
+    for method, rs in by.items():
+        print(f"method {method}: {len(rs)} cases")
+        counts: dict = {}
+        for r in rs:
+            counts[r["outcome"]] = counts.get(r["outcome"], 0) + 1
+        for k, v in sorted(counts.items()):
+            print(f"  {k:28s} {v}")
+        tell = [r for r in rs if r["effect"] and r["can_tell"]]
+        cannot = [r for r in rs if r["effect"] and not r["can_tell"]]
+        none = [r for r in rs if not r["effect"]]
+
+        def rate(xs, ok):
+            hit = sum(map(ok, xs))
+            return f"{hit}/{len(xs)} = {100 * hit / max(len(xs), 1):.0f} %"
+
+        print(f"  true hypothesis within the noise: {rate(rs, lambda r: r['noise_reached'])}"
+              " (bar >= 95 %)")
+        print(f"  data can tell -> effect and place named: "
+              f"{rate(tell, lambda r: r['outcome'] == 'right')} (bar >= 90 %)")
+        print(f"  data cannot tell -> parameters/none: "
+              f"{rate(cannot, lambda r: r['outcome'] == 'correct (cannot tell)')} (bar >= 95 %)")
+        print(f"  no effect -> false discoveries: "
+              f"{rate(none, lambda r: r['outcome'] == 'false discovery')} (bar <= 5 %)")
+        sims = [r["simulations"] for r in rs]
+        wall = [r["wall_s"] for r in rs]
+        print(f"  simulations per case: median {np.median(sims):.0f} (bar <= 250), max "
+              f"{max(sims)}; wall per case: median {np.median(wall):.0f} s (bar <= 240 s), "
+              f"max {max(wall):.0f} s")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cases", type=int, default=10)
+    ap.add_argument("--first", type=int, default=0, help="index of the first case")
+    ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
+    ap.add_argument("--method", choices=["dfols", "lm", "local"], default="dfols")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", type=Path, default=None, help="append each case to this JSONL")
+    ap.add_argument("--merge", type=Path, nargs="*", help="print the figures of these parts")
+    ap.add_argument("--short", action="store_true", help="0.15 s chirp (the test suite's)")
+    ap.add_argument("--verbose", action="store_true")
+    args = ap.parse_args()
+    if args.merge:
+        rows = [json.loads(line) for f in args.merge for line in f.read_text().splitlines()
+                if line.strip()]
+        summary(rows)
+        return
+    study = quick_study(args.short)
+    rows = []
+    for i in range(args.first, args.first + args.cases):
+        case = draw_case(study, args.seed + i)
+        r = run_case(study, case, args.method, args.workers,
+                     log=print if args.verbose else (lambda s: None))
+        truth = f"{case['effect']}@{case['place']}" if case["effect"] else "no effect"
+        print(f"case {i} ({truth}; {len(case['levels'])} level(s), noise "
+              f"{100 * case['noise']:.1f} %): {r['verdict']} -> {r['outcome']}; true chi2 "
+              f"{r['chi2_true_calibrated']:.1f} (at truth {r['chi2_truth']:.1f}) / "
+              f"{r['n_entries']}, H0 {r['chi2_h0']:.1f}; {r['simulations']} simulations, "
+              f"{r['wall_s']:.0f} s", flush=True)
+        rows.append(r)
+        if args.out:
+            with args.out.open("a") as f:
+                f.write(json.dumps(r) + "\n")
+    summary(rows)
+
+
+if __name__ == "__main__":
+    main()

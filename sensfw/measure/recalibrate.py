@@ -1,0 +1,76 @@
+"""Calibrate a study's base variables alone (hypothesis "parameters" of diagnosis, the
+``sensfw calibrate`` command): the global calibration of :mod:`sensfw.measure.calibration`,
+the calibrated values with intervals and flags, the error per level before and after, and
+the calibrated study file."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ..errors import SensfwError
+from ..runs import Runner
+from ..study import Study
+from ..studyfile import set_calibration, set_nominals
+from . import discrepancy
+from .augment import _source_text
+from .calibration import Coordinates
+from .diagnose import calibrate_hypothesis, workers_of
+from .hypotheses import Hypothesis, calibration_variables
+from .io import Measurement
+from .residuals import Residuals
+from .scatter import widen_for_roughness
+
+
+def default_budget(n_levels: int) -> int:
+    """Simulations of a calibration when none is given: 60 points, each at every level."""
+    return 60 * n_levels
+
+
+def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,
+                budget: int | None = None, refine: str = "dfols",
+                study_text: str | None = None, log=lambda s: None) -> dict:
+    """Calibrate the study's base variables alone (module docstring); ``budget`` counts
+    simulations (one per point and level; default 60 points)."""
+    names, source = calibration_variables(study, runner, log)
+    space = study.calibration_space(names)
+    res = Residuals(study, measurements, runner, space)
+    n_levels = res.n_levels
+    budget = default_budget(n_levels) if budget is None else int(budget)
+    base = Coordinates.of(space)
+    nominal = space.nominal_row()
+    (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
+    if nominal_cmp is None:
+        raise SensfwError("the study's model failed at the measured level(s)")
+    log(f"calibrating {', '.join(names)} ({source}), {budget} simulations")
+    h0 = Hypothesis(None, "", base)
+    fit = calibrate_hypothesis(res, h0, budget // n_levels, q=workers_of(runner),
+                               refine=refine, log=log)
+    scatter = widen_for_roughness(res, fit, log)
+    (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
+    trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":
+                   res.rms_db_per_level(c), "levels": [m.level for m in measurements],
+                   "params": dict(values)}
+                  for label, c, values in (("nominal model", nominal_cmp, nominal),
+                                           ("calibrated", cal_cmp, fit.values))]
+    result = {"variables": names, "variables_from": source, "channels": res.channels,
+              "params": fit.values, "base_parameters": space.to_parameters(fit.values),
+              "calibration": fit.summary(), "trades": fit.trades(),
+              "surrogate": fit.info.get("surrogate"), "chi2": fit.chi2,
+              "n_entries": res.entries.size(),
+              "fits_noise": discrepancy.fits(fit.best.w, len(base)),
+              "model_scatter_db": scatter, "trajectory": trajectory,
+              "n_simulations": res.n_simulations, "budget": budget,
+              "comparison": {"nominal model": [c.to_dict() for c in
+                                               res.output_comparisons(nominal_cmp)],
+                             "calibrated": [c.to_dict() for c in
+                                            res.output_comparisons(cal_cmp)]},
+              "_comparisons": {"nominal model": res.output_comparisons(nominal_cmp),
+                               "calibrated": res.output_comparisons(cal_cmp)}}
+    text = study_text if study_text is not None else _source_text(study)
+    if text is not None:
+        values = {k: v for k, v in result["base_parameters"].items()
+                  if v != study.parameters[k].nominal}
+        text = set_nominals(text, values, {k: (study.parameters[k].min,
+                                               study.parameters[k].max) for k in values})
+        result["study_text"] = set_calibration(text, names)
+    return result

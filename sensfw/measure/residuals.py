@@ -1,0 +1,186 @@
+"""Hypotheses against the measurements: a point (base design variables and effect
+parameters) -> model runs at every measured level (:func:`sensfw.evaluate.variant_spec`,
+through the run store) -> comparisons of every sensor channel the measurement and the
+model share -> weighted residual vectors (:mod:`sensfw.measure.discrepancy`).
+
+Every channel counts: a rig's accelerometers see the structure from different places, and
+what one channel cannot tell apart (a heavier crankshaft or a softer bearing) another can.
+
+Every residual vector computed is kept as a :class:`~sensfw.measure.calibration.Trial` of
+its model variant (:meth:`Residuals.trials`), so that hypotheses share evidence: the runs
+of "parameters only" are every candidate's runs at the candidate's neutral values, and a
+run at all levels also answers for any one of them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from ..evaluate import simulate, variant_spec
+from ..params import DesignSpace
+from ..runs import Runner
+from ..study import Study
+from . import discrepancy
+from .calibration import Trial
+from .compare import LevelComparison, compare_level
+from .io import Measurement
+
+EffectSpecs = Sequence[Mapping[str, str]]
+
+
+def shared_channels(study: Study, measurements: Sequence[Measurement]) -> list[str]:
+    """The study's output first, then every other channel all measurements and the model
+    have."""
+    sensors = list(study.model.sensors)
+    common = [c for c in sensors if all(c in m.signals.channels for m in measurements)]
+    return [study.output] + [c for c in common if c != study.output]
+
+
+def effects_key(effects: EffectSpecs | None) -> tuple:
+    return tuple(tuple(sorted(dict(e).items())) for e in effects or ())
+
+
+class Residuals:
+    """Discrepancy of model variants against ``measurements``; ``space`` holds the base
+    design variables a point may set (the rest stay at the study's nominal values);
+    ``channels`` (default: :func:`shared_channels`) are compared at every level."""
+
+    def __init__(self, study: Study, measurements: Sequence[Measurement], runner: Runner,
+                 space: DesignSpace | None = None, channels: Sequence[str] | None = None):
+        self.study, self.meas, self.runner = study, list(measurements), runner
+        self.space = space
+        self.channels = list(channels) if channels else shared_channels(study, measurements)
+        ex = study.excitation
+        self.band = (ex.f0, ex.f1)
+        self.n_simulations = 0
+        self.entries: discrepancy.Entries | None = None
+        #: label of the batch -> the reason of its last failed run (the run store's)
+        self.failures: dict[str, str] = {}
+        #: effects key -> [(levels, Trial)]: every residual vector computed
+        self._pool: dict[tuple, list[tuple[tuple[int, ...], Trial]]] = {}
+
+    @property
+    def n_levels(self) -> int:
+        return len(self.meas)
+
+    def parameters(self, values: Mapping[str, float]) -> dict[str, float]:
+        """Model parameter values of a point (design variables expanded to their members)."""
+        names = set(self.space.names) if self.space is not None else set()
+        base = {n: values[n] for n in names if n in values}
+        params = self.space.to_parameters(base) if base else {}
+        params.update({k: v for k, v in values.items() if k not in names})
+        return params
+
+    def comparisons(self, effects: EffectSpecs | None, points: Sequence[Mapping[str, float]],
+                    label: str, levels: Sequence[int] | None = None, detail: bool = True
+                    ) -> list[list[LevelComparison] | None]:
+        """Per point, the comparisons of the model with ``effects`` for every (level,
+        channel), levels outer (or only the ``levels``, indices of the measurements);
+        ``None`` where a run failed. ``detail=False``: without the model's resonance fits
+        (residuals only)."""
+        idx = list(range(self.n_levels)) if levels is None else list(levels)
+        specs = [variant_spec(self.study, self.parameters(p), self.meas[i].drive,
+                              effects or ()) for p in points for i in idx]
+        signals, errors = simulate(self.runner, specs, label)
+        self.n_simulations += len(specs)
+        failed = [e for e in errors if e is not None]
+        if failed:
+            self.failures[label] = failed[-1]
+        out = []
+        for k in range(len(points)):
+            comps = []
+            for j, i in enumerate(idx):
+                sig = signals[k * len(idx) + j]
+                if sig is None:
+                    comps = None
+                    break
+                m = self.meas[i]
+                comps += [compare_level(m.signals, sig, ch, self.band, m.level, m.file,
+                                        detail=detail) for ch in self.channels]
+            out.append(comps)
+        if self.entries is None and levels is None:
+            first = next((c for c in out if c is not None), None)
+            if first is not None:
+                self.entries = discrepancy.Entries.of(first)
+        if self.entries is not None:  # every residual vector is evidence for later
+            pool = self._pool.setdefault(effects_key(effects), [])
+            pool += [(tuple(idx), Trial(dict(p), self.weighted(c, levels)))
+                     for p, c in zip(points, out, strict=True)]
+        return out
+
+    def evaluate(self, effects: EffectSpecs | None, points: Sequence[Mapping[str, float]],
+                 label: str, levels: Sequence[int] | None = None
+                 ) -> list[np.ndarray | None]:
+        """Weighted residual vectors of the model with ``effects`` at ``points`` (kept as
+        trials of that variant)."""
+        comps = self.comparisons(effects, points, label, levels, detail=False)
+        return [self.weighted(c, levels) for c in comps]
+
+    def trials(self, effects: EffectSpecs | None = None, levels: Sequence[int] | None = None,
+               extra: Mapping[str, float] | None = None) -> list[Trial]:
+        """Every successful trial of the model with ``effects`` that covers ``levels``
+        (default all), its residuals cut to those levels; ``extra`` values are added to each
+        trial's point (the neutral values of an effect that H0's trials stand for)."""
+        want = tuple(range(self.n_levels)) if levels is None else tuple(levels)
+        sizes = [s.stop - s.start for s in self.level_slices()]
+        out = []
+        for lv, t in self._pool.get(effects_key(effects), []):
+            if t.w is None or not set(want) <= set(lv):
+                continue
+            offsets = np.cumsum([0] + [sizes[i] for i in lv])
+            pos = {i: k for k, i in enumerate(lv)}
+            w = np.concatenate([t.w[offsets[pos[i]]:offsets[pos[i] + 1]] for i in want])
+            out.append(Trial({**t.values, **(extra or {})}, w))
+        return out
+
+    def add_scatter(self, extra_db: np.ndarray) -> None:
+        """Widen every entry's standard error by the model's own scatter (dB, one value per
+        entry: ``sigma^2 + extra^2``) and reweight every trial kept so far."""
+        old = np.array([x for part in self.entries.sigma for x in part])
+        new = np.sqrt(old**2 + np.asarray(extra_db, float) ** 2)
+        sigma, i = [], 0
+        for part in self.entries.sigma:
+            sigma.append(tuple(new[i:i + len(part)]))
+            i += len(part)
+        slices = self.level_slices()
+        scale = old / new
+        self.entries = discrepancy.Entries(self.entries.bands, self.entries.thd, tuple(sigma))
+        for pool in self._pool.values():
+            for lv, t in pool:
+                if t.w is not None:
+                    t.w = t.w * np.concatenate([scale[slices[i]] for i in lv])
+
+    def _entries(self, levels: Sequence[int] | None) -> discrepancy.Entries:
+        if levels is None:
+            return self.entries
+        k = len(self.channels)
+        return self.entries.select([i * k + c for i in levels for c in range(k)])
+
+    def weighted(self, comps, levels: Sequence[int] | None = None) -> np.ndarray | None:
+        return None if comps is None else discrepancy.weighted(comps, self._entries(levels))
+
+    def level_slices(self) -> list[slice]:
+        """The entries of each level (all its channels) in the residual vector."""
+        per = self.entries.level_slices()
+        k = len(self.channels)
+        return [slice(per[i * k].start, per[i * k + k - 1].stop) for i in range(self.n_levels)]
+
+    def chi2_per_level(self, w: np.ndarray) -> list[float]:
+        return [float(np.sum(w[s] ** 2)) for s in self.level_slices()]
+
+    def rms_db(self, comps) -> float | None:
+        """RMS dB difference over every entry (all levels and channels)."""
+        return None if comps is None else discrepancy.rms_db(comps, self.entries)
+
+    def rms_db_per_level(self, comps) -> list[float] | None:
+        if comps is None:
+            return None
+        k = len(self.channels)
+        return [discrepancy.rms_db(comps[i * k:(i + 1) * k], self._entries([i]))
+                for i in range(self.n_levels)]
+
+    def output_comparisons(self, comps) -> list[LevelComparison] | None:
+        """The study output's comparison at every level (for plots)."""
+        return None if comps is None else comps[::len(self.channels)]
