@@ -141,7 +141,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             return fit
 
         ranked = screen(res, h0, hyps, h0_cmp, level, on_level, max(room, len(hyps)),
-                        log=log)
+                        margin=min_delta_bic, log=log)
         sl = res.level_slices()[level]
         chi0 = float(np.sum(h0.fit.best.w[sl] ** 2))
         able = [h for h in ranked if h.screen.get("calibrated", math.inf) +

@@ -13,7 +13,9 @@ three rounds of successive halving.
    (:class:`~sensfw.measure.calibration.ResidualModel`), fitted to its runs and to H0's
    (which are the candidate's runs at its neutral values: shared evidence), gives its
    predicted optimum and lower bound for the report.
-3. **Calibration on the level** — the ``keep`` best are calibrated globally on that level
+3. **Calibration on the level** — the leader and the next best (``keep`` in all) whose
+   looks gained more than the base parameters alone could are calibrated globally on that
+   level
    (:func:`sensfw.measure.diagnose.calibrate_hypothesis`: design, residual surrogate,
    DFO-LS), their surrogates seeded with all of the above.
 
@@ -71,11 +73,14 @@ def _scaled_probe(h: Hypothesis, probe: dict, c: float) -> dict:
 
 def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, level: int,
            calibrate_on: CalibrateOn, budget: int, keep: int = 3, min_second: int = 4,
-           log: Log = lambda s: None) -> list[Hypothesis]:
+           margin: float = 10.0, log: Log = lambda s: None) -> list[Hypothesis]:
     """Race ``hyps`` on ``level`` with about ``budget`` simulations (module docstring);
     fills each ``h.screen`` and returns them ranked, most promising first. ``keep``
     candidates at most are calibrated on the level, with what the looks leave (at least
-    ``6 (d + 1)`` points each are reserved, ``d`` the base variables)."""
+    ``6 (d + 1)`` points each are reserved, ``d`` the base variables): the leader of the
+    looks, and those whose looks gained ``margin`` (chi2) over what the base parameters
+    alone reach on the level by H0's linearised fit; the others showed nothing an effect
+    explains."""
     levels = [level]
     sl = res.level_slices()[level]
     base = h0.fit.values
@@ -142,8 +147,12 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             f"{h.name} {h.screen['score']:.4g} (surrogate {h.screen['predicted']:.4g}, "
             f"bound {h.screen['bound']:.4g})" for h in second[:6]))
 
-    # 3. calibration on the level of the best few
-    finalists = second[:keep]
+    # 3. calibration on the level of the best few: the leader, and the others whose looks
+    # gained more on the level than the base parameters alone could (H0's linearised fit
+    # there) by the verdict's margin
+    chi0_lin = _linearised(w0, J0, np.zeros_like(w0), z0)[0]
+    finalists = [h for i, h in enumerate(second[:keep])
+                 if i == 0 or h.screen["score"] < chi0_lin - margin]
     for i, h in enumerate(finalists):
         share = left() // (len(finalists) - i)
         if share < 2 * h.k + 2:
