@@ -34,7 +34,7 @@ from ..errors import MeasurementError
 from ..excitation import Excitation, SampledForce
 from ..models.base import Signals
 from ..signal.sweep import SweepEstimate, estimate_sweep
-from .io import Measurement
+from .measurement import Measurement
 
 #: relative tolerance on f0, f1 and duration for "the record is the study's sweep"
 SWEEP_TOLERANCE = 0.03

@@ -19,57 +19,20 @@ from __future__ import annotations
 import json
 import re
 import tomllib
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from ..errors import MeasurementError
 from ..models.base import Signals
+from .measurement import Measurement
+
+__all__ = ["Measurement", "load", "load_all", "read_csv", "read_uff", "read_uff_levels",
+           "write_csv", "write_uff"]
 
 TARGET_UNITS = {"time": "s", "force": "N"}
 ACCEL_UNIT = "m/s^2"
 _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
-
-
-@dataclass
-class Measurement:
-    """Signals read from one file (or one folder of files), with where they came from.
-
-    ``signals.force`` holds the excitation; ``signals.units["force"]`` says what it is: N
-    for a force, V for an amplifier voltage (a model is then driven through the gain
-    parameter ``excitation_gain``, N/V); :attr:`excitation` names it. ``level`` is the
-    excitation amplitude in that unit if known; ``units`` the units as the file labels them.
-
-    After :func:`sensfw.measure.checks.prepare`: ``sweep`` is the estimated excitation
-    (:class:`~sensfw.signal.sweep.SweepEstimate`) and ``drive`` the excitation that drives the
-    model for this measurement (the study's ideal sweep at the measured level, or the
-    measured record itself).
-    """
-
-    file: str
-    signals: Signals
-    units: dict[str, str] = field(default_factory=dict)
-    level: float | None = None  # excitation amplitude (N, or V for a voltage) if known
-    notes: list[str] = field(default_factory=list)
-    sweep: Any = None
-    drive: Any = None
-
-    @property
-    def fs(self) -> float:
-        return self.signals.fs
-
-    @property
-    def input_unit(self) -> str:
-        """Unit of the excitation channel: N for a force, V for an amplifier voltage."""
-        return self.signals.units.get("force", "N")
-
-    @property
-    def excitation(self) -> str:
-        """``"voltage"`` when the excitation channel is an amplifier voltage, else
-        ``"force"``."""
-        return "voltage" if self.input_unit == "V" else "force"
 
 
 def _factor(file: str, column: str, unit: str | None, target: str) -> float:

@@ -32,8 +32,8 @@ import numpy as np
 
 from ..errors import MeasurementError
 from ..models.base import Signals
-from .io import Measurement
 from .lms_format import LMSFunction, lms_struct, read_functions, si_unit
+from .measurement import Measurement
 
 __all__ = ["BERT_POSITIONS", "LMS_WINDOWS", "LMSFunction", "amplitude", "frf_settings",
            "level_from_name", "lms_struct", "read_functions", "read_lms", "si_unit"]
