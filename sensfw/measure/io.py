@@ -58,7 +58,7 @@ def _sidecar(path: Path) -> dict:
         for candidate in (side, side2):
             if candidate is not None and candidate.exists():
                 try:
-                    return reader(candidate.read_text())
+                    return reader(candidate.read_text(encoding="utf-8"))
                 except Exception as err:
                     raise MeasurementError(str(candidate), f"unreadable sidecar: {err}") \
                         from None
@@ -279,18 +279,54 @@ def load_all(path: str | Path) -> list[Measurement]:
 def write_csv(path: str | Path, signals: Signals, level: float | None = None,
               meta: dict | None = None) -> Path:
     """Write signals as a measurement CSV with units in the header (+ a TOML sidecar with the
-    sample rate, level and any ``meta``)."""
+    sample rate, level and any ``meta``, written by tomlkit: any string, nested tables and
+    arrays round-trip through :func:`load`; a ``None`` anywhere in ``meta`` is an error
+    naming its key, since TOML has no null)."""
     path = Path(path)
+    side = path.with_suffix(".toml")
+    text = sidecar_text(str(side), signals.fs, level, meta)  # checked before writing anything
     cols = ["time [s]", f"force [{signals.units.get('force', 'N')}]",
             *[f"{k} [{signals.units.get(k, ACCEL_UNIT)}]" for k in signals.channels]]
     data = np.column_stack([signals.t, signals.force, *signals.channels.values()])
     np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
-    side = {"fs": float(signals.fs)}
-    if level is not None:
-        side["level"] = float(level)
-    lines = [f"fs = {side['fs']!r}"] + ([f"level = {side['level']!r}"] if level is not None
-                                        else [])
-    for k, v in (meta or {}).items():
-        lines.append(f"{k} = {json.dumps(v)}")
-    path.with_suffix(".toml").write_text("\n".join(lines) + "\n")
+    side.write_text(text, encoding="utf-8")
     return path
+
+
+def _null_at(value, where: str) -> str | None:
+    """The key path of the first ``None`` inside ``value`` (dicts and lists), or None."""
+    if value is None:
+        return where
+    items = value.items() if isinstance(value, dict) else \
+        enumerate(value) if isinstance(value, (list, tuple)) else ()
+    for k, v in items:
+        found = _null_at(v, f"{where}[{k!r}]" if isinstance(k, str) else f"{where}[{k}]")
+        if found:
+            return found
+    return None
+
+
+def sidecar_text(file: str, fs: float, level: float | None, meta: dict | None) -> str:
+    """The TOML sidecar of a measurement CSV: ``fs``, ``level`` and the entries of ``meta``
+    (:func:`write_csv`)."""
+    import tomlkit
+    from tomlkit.exceptions import ConvertError
+
+    doc = tomlkit.document()
+    doc["fs"] = float(fs)
+    if level is not None:
+        doc["level"] = float(level)
+    for key, value in (meta or {}).items():
+        where = f"meta[{key!r}]"
+        if key in doc or key == "units":
+            raise MeasurementError(file, f"{where}: the sidecar's own key; rename it")
+        null = _null_at(value, where)
+        if null:
+            raise MeasurementError(file, f"{null} is None, which TOML cannot hold (it has no "
+                                         f"null): leave the key out or give a value")
+        try:
+            doc[key] = value.item() if isinstance(value, np.generic) else value
+        except (ConvertError, TypeError, ValueError) as err:
+            raise MeasurementError(file, f"{where} = {value!r} cannot be written as TOML: "
+                                         f"{err}") from None
+    return tomlkit.dumps(doc)
