@@ -1,14 +1,12 @@
 """Model against measurement: where and how they differ ("see where it fails").
 
-For one excitation level: FRF error in dB (overall RMS and per one-third-octave band),
-a resonance table (model vs measured frequency, shift, half-power damping ratio, refined by
-a single-mode fit), a harmonic table (order amplitudes and their noise floor, dB
-difference), THD and the DC offset. Over the levels: the amplitude-dependence table and the
-signature classes of :mod:`sensfw.measure.signatures` (amplitude dependence is the
-fingerprint of contact nonlinearity).
-
-(A little over the usual 400 lines: the per-level noise estimates (band errors, harmonic
-floor, DC standard error) share one local fit and belong with the numbers they qualify.)
+For one excitation level, :func:`compare_level`: FRF error in dB (per band, with the
+measurement's noise: :mod:`sensfw.measure.bands`), a resonance table (model vs measured
+frequency, shift, damping: :mod:`sensfw.measure.resonance`), a harmonic table, THD and the
+DC offset (:mod:`sensfw.measure.distortion`). Over the levels, :func:`compare_measurements`
+adds the amplitude-dependence table and the signature classes of
+:mod:`sensfw.measure.signatures` (amplitude dependence is the fingerprint of contact
+nonlinearity).
 """
 
 from __future__ import annotations
@@ -16,291 +14,28 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from ..models.base import Signals
-from ..signal import frf, harmonic_amplitudes, octave_smooth
+from .bands import (
+    FRACTIONS,
+    SMOOTH,
+    analysis_bands,
+    band_frf_db,
+    band_noise,
+    frf_db,
+    noise_sigma,
+    octave_bands,
+    third_octave_bands,
+)
+from .distortion import dc_offset, dc_standard_error, harmonic_floor, harmonics
+from .resonance import MIN_FIT_R2, fit_resonances, match_resonances, resonances
 from .signatures import amplitude_dependence
 
-#: FRF settings of every comparison: Hv over the whole record, smoothed for the metrics
-SMOOTH = 24  # 1/24 octave
-
-
-def octave_bands(fmin: float, fmax: float, fraction: int = 3
-                 ) -> list[tuple[float, float, float]]:
-    """(lower, centre, upper) of the base-10 1/``fraction``-octave bands (IEC 61260:
-    centres ``1000 * 10^(3n / (10 fraction))``) inside ``[fmin, fmax]``."""
-    out = []
-    step = 3.0 / (10.0 * fraction)  # decades per band
-    for n in range(int(np.floor(np.log10(fmin / 1000) / step)) - 1,
-                   int(np.ceil(np.log10(fmax / 1000) / step)) + 2):
-        c = 1000.0 * 10 ** (n * step)
-        lo, hi = c / 10 ** (step / 2), c * 10 ** (step / 2)
-        if lo >= fmin * (1 - 1e-9) and hi <= fmax * (1 + 1e-9):
-            out.append((lo, c, hi))
-    return out
-
-
-def third_octave_bands(fmin: float, fmax: float) -> list[tuple[float, float, float]]:
-    """The one-third-octave bands (IEC 61260) inside ``[fmin, fmax]``."""
-    return octave_bands(fmin, fmax, 3)
-
-
-#: fractions of an octave the comparison bands may take
-FRACTIONS = (3, 6, 12, 24, 48)
-
-
-def analysis_bands(fmin: float, fmax: float, at_least: int = 12
-                   ) -> list[tuple[float, float, float]]:
-    """The comparison bands of a sweep over ``[fmin, fmax]``: one-third octaves, or the
-    coarsest finer fraction that gives ``at_least`` bands (a narrow sweep, such as 70-110 Hz,
-    holds only one third-octave)."""
-    for fraction in FRACTIONS:
-        bands = octave_bands(fmin, fmax, fraction)
-        if len(bands) >= at_least:
-            return bands
-    return bands
-
-
-def frf_db(sig: Signals, channel: str, band: tuple[float, float], smooth: int = SMOOTH,
-           complex_frf: bool = False):
-    """(f, dB magnitude) of the Hv FRF, 1/``smooth``-octave smoothed, inside ``band``
-    (with ``complex_frf`` also the unsmoothed complex FRF on the same lines)."""
-    f, H = frf(sig.force, sig.channel(channel), sig.fs, estimator="Hv")
-    mag = octave_smooth(f, H, smooth)
-    sel = (f >= band[0]) & (f <= band[1]) & (mag > 0)
-    if complex_frf:
-        return f[sel], 20 * np.log10(mag[sel]), H[sel]
-    return f[sel], 20 * np.log10(mag[sel])
-
-
-def band_frf_db(sig: Signals, channel: str, bands) -> np.ndarray:
-    """dB magnitude of the FRF averaged coherently over each band,
-    ``H_b = sum_b conj(P) X / sum_b |P|^2`` (H1 over the band's bins): noise averages down
-    with the number of bins while the swept signal adds up."""
-    P = np.fft.rfft(sig.force)
-    X = np.fft.rfft(sig.channel(channel))
-    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
-    out = []
-    for lo, _, hi in bands:
-        sel = (f >= lo) & (f < hi)
-        num = np.sum(np.conj(P[sel]) * X[sel])
-        den = np.sum(np.abs(P[sel]) ** 2)
-        out.append(20 * np.log10(np.abs(num / den)) if den > 0 and num != 0 else np.nan)
-    return np.array(out)
-
-
-def _local_fit(sig: Signals, channel: str, half_width: int = 4):
-    """(f, P, H_k, per-bin residual power) of the local fit of :func:`band_noise`: ``X_j ~
-    (a_k + b_k (j - k)) P_j`` over the ``2 half_width + 1`` bins around each bin ``k`` (an
-    FRF that varies linearly across the window, so a resonance of a few per cent damping
-    leaves little structure in the residual), ``H_k = a_k``, the residual corrected for the
-    two fitted degrees of freedom."""
-    P = np.fft.rfft(sig.force)
-    X = np.fft.rfft(sig.channel(channel))
-    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
-    j = np.arange(-half_width, half_width + 1, dtype=float)
-    pp = np.abs(P) ** 2
-    px = np.conj(P) * X
-
-    def local(x, weights):  # sum over the window around each bin of weights[j] x[k + j]
-        return np.convolve(x, weights[::-1], mode="same")
-
-    s0, s1, s2 = local(pp, np.ones_like(j)), local(pp, j), local(pp, j * j)
-    t0, t1 = local(px, np.ones_like(j)), local(px, j)
-    det = s0 * s2 - s1 * s1
-    ok = det > 1e-12 * np.maximum(s0 * s2, 1e-300)
-    Hk = np.divide(t0 * s2 - t1 * s1, det, out=np.zeros_like(t0), where=ok)
-    resid = np.abs(X - Hk * P) ** 2 * (len(j) / (len(j) - 2))
-    return f, P, Hk, resid
-
-
-def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.ndarray:
-    """Relative standard error of each band's H1 (:func:`band_frf_db`) from the output
-    noise of the record itself.
-
-    With ``X = H P + N`` the band estimate ``sum conj(P) X / sum |P|^2`` has the relative
-    error ``sqrt(sigma_N^2 / sum_b |H P|^2)``. The per-bin noise variance ``sigma_N^2`` is
-    estimated from the residual of the local fit of :func:`_local_fit`. Bands whose error is
-    large are noise-limited: the measurement cannot say there how wrong the model is (and
-    a nonlinear structure's distortion counts as noise here: :func:`compare_level` takes the
-    model's own share out)."""
-    f, P, Hk, resid = _local_fit(sig, channel, half_width)
-    out = []
-    for lo, _, hi in bands:
-        sel = (f >= lo) & (f < hi)
-        signal = np.sum(np.abs(Hk[sel] * P[sel]) ** 2)
-        noise = np.sum(resid[sel]) / max(int(sel.sum()), 1)  # per-bin variance
-        out.append(float(np.sqrt(noise / signal)) if signal > 0 else np.inf)
-    return np.array(out)
-
-
-def resonances(f: np.ndarray, db: np.ndarray, prominence: float = 6.0,
-               dynamic_range: float = 30.0) -> list[dict]:
-    """Peaks of a (smoothed) FRF magnitude with their half-power damping ratio
-    ``zeta = (f2 - f1) / (2 fn)`` from the -3 dB crossings. Peaks more than
-    ``dynamic_range`` dB below the highest one are ignored (noise ripple where the response
-    is weak)."""
-    peaks, props = find_peaks(db, prominence=prominence)
-    keep = db[peaks] >= np.max(db) - dynamic_range
-    peaks, proms = peaks[keep], props["prominences"][keep]
-    out = []
-    for i, prom in zip(peaks, proms, strict=True):
-        target = db[i] - 3.0
-        lo = i
-        while lo > 0 and db[lo] > target:
-            lo -= 1
-        hi = i
-        while hi < len(db) - 1 and db[hi] > target:
-            hi += 1
-        zeta = None
-        if db[lo] <= target and db[hi] <= target:
-            f1 = np.interp(target, [db[lo], db[lo + 1]], [f[lo], f[lo + 1]])
-            f2 = np.interp(target, [db[hi], db[hi - 1]], [f[hi], f[hi - 1]])
-            zeta = float((f2 - f1) / (2 * f[i]))
-        out.append({"frequency": float(f[i]), "peak_db": float(db[i]),
-                    "prominence_db": float(prom), "damping_ratio": zeta})
-    return out
-
-
-#: a single-mode fit replaces the half-power values when it explains this fraction of the
-#: complex FRF's variance near the peak (below it the peak is no clean mode: a distorted
-#: nonlinear response, two modes within a few bandwidths)
-MIN_FIT_R2 = 0.9
-
-
-def fit_resonances(f: np.ndarray, H: np.ndarray, peaks: list[dict],
-                   min_r2: float = MIN_FIT_R2) -> list[dict]:
-    """Each peak of :func:`resonances` with a single-mode fit of the unsmoothed complex FRF
-    ``H`` (:func:`sensfw.signal.modal.sdof_fit`): ``fit_frequency``, ``fit_damping`` and
-    ``fit_r2``, or ``None`` where the fit fails or explains less than ``min_r2``. The
-    half-power values stay in ``frequency`` and ``damping_ratio``; whoever compares two
-    FRFs uses the fitted values only where both sides have them (the half-power damping of
-    a 1/24-octave smoothed FRF is biased upwards, see :mod:`sensfw.signal.modal`)."""
-    from ..errors import SignalError
-    from ..signal.modal import sdof_fit
-
-    out = []
-    for p in peaks:
-        fit = None
-        try:
-            fit = sdof_fit(f, H, p["frequency"], p["damping_ratio"] or 0.02)
-        except SignalError:
-            pass
-        ok = fit is not None and fit.r2 >= min_r2 and \
-            abs(np.log(fit.frequency / p["frequency"])) < 0.05
-        out.append({**p, "fit_frequency": fit.frequency if ok else None,
-                    "fit_damping": fit.damping_ratio if ok else None,
-                    "fit_r2": fit.r2 if fit is not None else None})
-    return out
-
-
-def match_resonances(model: list[dict], measured: list[dict], tol: float = 0.25) -> list[dict]:
-    """Pair each measured resonance with the nearest model resonance within ``tol``
-    (relative); unmatched ones are listed with the other side empty (a missing or an extra
-    mode)."""
-    rows, used = [], set()
-    for m in measured:
-        best, dist = None, tol
-        for j, s in enumerate(model):
-            d = abs(np.log(s["frequency"] / m["frequency"]))
-            if j not in used and d < dist:
-                best, dist = j, d
-        if best is None:
-            rows.append({"measured_hz": m["frequency"], "model_hz": None, "shift_pct": None,
-                         "measured_damping": m["damping_ratio"], "model_damping": None,
-                         "note": "no model resonance nearby (missing mode?)"})
-        else:
-            used.add(best)
-            s = model[best]
-            rows.append({"measured_hz": m["frequency"], "model_hz": s["frequency"],
-                         "shift_pct": 100 * (s["frequency"] / m["frequency"] - 1),
-                         "measured_damping": m["damping_ratio"],
-                         "model_damping": s["damping_ratio"], "note": ""})
-    for j, s in enumerate(model):
-        if j not in used:
-            rows.append({"measured_hz": None, "model_hz": s["frequency"], "shift_pct": None,
-                         "measured_damping": None, "model_damping": s["damping_ratio"],
-                         "note": "not in the measurement (extra model mode?)"})
-    return sorted(rows, key=lambda r: r["measured_hz"] or r["model_hz"])
-
-
-def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3)
-              ) -> dict[int, float]:
-    """RMS order amplitudes ``P_1`` and ``P_k`` (Eqs. 12-17) of a swept record, each ratio
-    ``P_k / P_1`` over the part of the sweep where order ``k`` stays below 0.45 fs (so H3 is
-    measured even where the whole sweep only allows order 2). Returns ``{1: P_1 (whole
-    sweep), k: P_1(part) * ratio_k}``; empty without a sweep (random excitation)."""
-    if sig.f_inst is None:
-        return {}
-    s = sig.sweep()
-    x, fr = s.channel(channel), np.asarray(s.f_inst, float)
-    out = harmonic_amplitudes(x, s.fs, fr, harmonics=(1,))
-    for k in orders:
-        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
-        if n < 0.1 * len(fr):
-            continue
-        part = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1, k))
-        if part[1] > 0:
-            out[k] = out[1] * part[k] / part[1]
-    return out
-
-
-def harmonic_floor(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3),
-                   seed: int = 0) -> dict[int, float]:
-    """Noise floor of each ratio ``P_k / P_1`` of :func:`harmonics`: the order amplitude
-    that the record's output noise alone gives at order ``k``, over the same part of the
-    sweep, divided by that part's ``P_1``.
-
-    The noise is white with the standard deviation of :func:`noise_sigma`; its order
-    amplitude is computed on a realisation of it (the order spectrum averages over frames,
-    so one realisation varies by a few per cent). Noise adds in power, ``P_k^2 ~ P_k,true^2
-    + P_k,noise^2``: a measured ratio within a few dB of its floor says little about the
-    harmonic. (The spectrum between the orders is no noise estimate for a fast sweep: the
-    ring-down of each resonance smears across orders there.)"""
-    if sig.f_inst is None:
-        return {}
-    sigma = noise_sigma(sig, channel)
-    s = sig.sweep()
-    x, fr = s.channel(channel), np.asarray(s.f_inst, float)
-    noise = sigma * np.random.default_rng(seed).standard_normal(len(x))
-    out = {}
-    for k in orders:
-        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
-        if n < 0.1 * len(fr):
-            continue
-        p1 = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1,))[1]
-        pk = harmonic_amplitudes(noise[:n], s.fs, fr[:n], harmonics=(k,))[k]
-        if p1 > 0:
-            out[k] = float(pk / p1)
-    return out
-
-
-def dc_offset(sig: Signals, channel: str) -> float:
-    """Mean of the output over the sweep (an asymmetric contact or a preload can shift it;
-    for an accelerometer mostly the sensor's own offset)."""
-    return float(np.mean(sig.sweep().channel(channel)))
-
-
-def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
-    """Standard deviation of the output noise of a record (assumed white), from the
-    residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n sigma^2``,
-    read off a low quantile of the residual power over the bins (the power of complex
-    Gaussian noise is exponential, so its ``q``-quantile is ``-ln(1 - q)`` times its mean).
-
-    Exact for a linear response; harmonic distortion of a swept record does not follow
-    the local fit either (its phase turns by ~1 rad per line relative to the force's), so a
-    strongly nonlinear record gives an upper bound: the low quantile keeps to the lines
-    where the distortion is weakest. 0 for a noise-free linear record."""
-    _, _, _, resid = _local_fit(sig, channel)
-    q = float(np.quantile(resid[1:], quantile)) / -np.log1p(-quantile)
-    return float(np.sqrt(q / len(sig.force)))
-
-
-def dc_standard_error(sig: Signals, channel: str) -> float:
-    """Standard error of :func:`dc_offset` from the output noise: ``sigma / sqrt(n)`` for
-    the mean over the sweep's ``n`` samples (:func:`noise_sigma`)."""
-    return noise_sigma(sig, channel) / float(np.sqrt(len(sig.sweep().force)))
+__all__ = ["FRACTIONS", "MIN_FIT_R2", "SMOOTH", "Comparison", "LevelComparison",
+           "analysis_bands", "band_frf_db", "band_noise", "compare_level",
+           "compare_measurements", "dc_offset", "dc_standard_error", "fit_resonances",
+           "frf_db", "harmonic_floor", "harmonics", "match_resonances", "noise_sigma",
+           "octave_bands", "resonances", "third_octave_bands"]
 
 
 @dataclass
