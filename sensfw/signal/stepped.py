@@ -60,7 +60,8 @@ class SteppedFRF:
     ``frf[ch]``: complex ratio response / excitation at the step frequency; ``amplitudes[ch]``:
     complex amplitudes of the response at orders :data:`ORDERS` (``(n, len(ORDERS))``, NaN
     above 0.45 fs), ``x(t) = Re(X e^{i 2 pi k f t})``; ``settled_db[ch]``: the difference of
-    the line between the first and the last half of the fitted periods (dB).
+    the line between the first and the last half of the fitted periods (dB; NaN where the
+    step holds a single period).
     """
 
     f: np.ndarray
@@ -160,8 +161,9 @@ def stepped_frf(force: np.ndarray, responses: dict[str, np.ndarray], fs: float,
         r = [step_amplitudes(x, fs, s, orders, fraction) for s in steps]
         out.amplitudes[name] = np.array([w for w, _ in r])
         out.frf[name] = out.amplitudes[name][:, k1] / fp
-        halves = np.array([h[:, k1] for _, h in r]) / np.array([h[:, k1] for _, h in p])
-        out.settled_db[name] = 20 * np.log10(np.abs(halves[:, 1]) / np.abs(halves[:, 0]))
+        with np.errstate(invalid="ignore", divide="ignore"):  # NaN: one period or less
+            halves = np.array([h[:, k1] for _, h in r]) / np.array([h[:, k1] for _, h in p])
+            out.settled_db[name] = 20 * np.log10(np.abs(halves[:, 1]) / np.abs(halves[:, 0]))
     return out
 
 
