@@ -35,17 +35,22 @@ ACCEL_UNIT = "m/s^2"
 _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
 
 
-def _factor(file: str, column: str, unit: str | None, target: str) -> float:
-    """Multiplier from ``unit`` to ``target`` (``g`` is standard gravity)."""
-    if not unit:
-        return 1.0
+def _quantity(unit: str):
+    """A pint quantity of 1 ``unit`` (``g`` is standard gravity)."""
+    from ..study import units
+
     u = unit.strip()
     if u.lower() in ("g", "gn", "g0", "g_n"):
         u = "standard_gravity"
-    from ..study import units
+    return units().Quantity(1.0, u)
 
+
+def _factor(file: str, column: str, unit: str | None, target: str) -> float:
+    """Multiplier from ``unit`` to ``target``."""
+    if not unit:
+        return 1.0
     try:
-        return float(units().Quantity(1.0, u).to(target).magnitude)
+        return float(_quantity(unit).to(target).magnitude)
     except Exception as err:
         raise MeasurementError(file, f"unit {unit!r} cannot be converted to {target}: {err}",
                                column) from None
@@ -65,20 +70,26 @@ def _sidecar(path: Path) -> dict:
     return {}
 
 
-def _target(column: str, unit: str | None = None) -> str:
-    """SI unit a column is converted to; the excitation may be a force or a voltage."""
-    if column == "force" and unit and _is_voltage(unit):
-        return "V"
-    return TARGET_UNITS.get(column, ACCEL_UNIT)
+#: the SI units a response channel is converted to: the first of its dimension
+SI_UNITS = ("m/s^2", "m/s", "m", "N", "V", "Pa", "rad/s^2", "rad/s", "rad")
 
 
-def _is_voltage(unit: str) -> bool:
-    from ..study import units
-
+def _fits(unit: str, si: str) -> bool:
     try:
-        return units().Quantity(1.0, unit.strip()).check("[electric_potential]")
+        return _quantity(unit).dimensionality == _quantity(si).dimensionality
     except Exception:
         return False
+
+
+def _target(column: str, unit: str | None = None) -> str:
+    """SI unit a column is converted to: the excitation is a force or a voltage, a response
+    is converted to the SI unit of its dimension (:data:`SI_UNITS`; an acceleration where
+    no unit is given)."""
+    if column in TARGET_UNITS and column != "force":
+        return TARGET_UNITS[column]
+    if column == "force":
+        return "V" if unit and _fits(unit, "V") else "N"
+    return next((si for si in SI_UNITS if unit and _fits(unit, si)), ACCEL_UNIT)
 
 
 def read_csv(path: str | Path) -> Measurement:

@@ -192,3 +192,20 @@ def test_sidecar_round_trips_any_string_and_refuses_null(tmp_path, good):
         assert not out.exists() and not out.with_suffix(".toml").exists()
     with pytest.raises(MeasurementError, match=r"meta\['level'\]: the sidecar's own key"):
         csv(tmp_path, good, name="own.csv", level=1.0, meta={"level": 2.0})
+
+
+def test_a_velocity_channel_keeps_its_dimension(tmp_path, good):
+    """A response is converted to the SI unit of its own dimension: the beam's laser
+    velocity, written by ``sensfw simulate studies/bert.toml`` as ``Laser [m/s]``, was
+    refused (converted to m/s^2); in mm/s it is scaled to m/s; an acceleration in g to
+    m/s^2 as before."""
+    v = good.channels["a1"]
+    sig = Signals(t=good.t, force=good.force, channels={"Laser": v, "acc": v}, fs=good.fs,
+                  units={"force": "V", "Laser": "m/s", "acc": "m/s^2"})
+    f = csv(tmp_path, sig)
+    m = load(f)
+    assert m.signals.units == {"force": "V", "Laser": "m/s", "acc": "m/s^2"}
+    g = tmp_path / "mm.csv"
+    g.write_text(f.read_text().replace("Laser [m/s]", "Laser [mm/s]"))
+    np.testing.assert_allclose(load(g).signals.channels["Laser"], 1e-3 * m.signals.channels[
+        "Laser"], rtol=1e-9)
