@@ -25,10 +25,10 @@ import numpy as np
 
 from ..errors import MeasurementError
 from ..models.base import Signals
-from .measurement import Measurement
+from .measurement import FRFRecord, Measurement
 
-__all__ = ["Measurement", "load", "load_all", "read_csv", "read_uff", "read_uff_levels",
-           "write_csv", "write_uff"]
+__all__ = ["FRFRecord", "Measurement", "load", "load_all", "read_csv", "read_uff",
+           "read_uff_levels", "write_csv", "write_uff"]
 
 TARGET_UNITS = {"time": "s", "force": "N"}
 ACCEL_UNIT = "m/s^2"
@@ -165,11 +165,32 @@ def _assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_decl
 
 
 _LEVEL = re.compile(r"level\s*=\s*([-+0-9.eE]+)")
+_DIRECTION = re.compile(r"direction\s*=\s*(up|down)", re.IGNORECASE)
+_KIND = re.compile(r"kind\s*=\s*([a-z_]+)", re.IGNORECASE)
+#: UFF58 specific data types (abscissa, ordinate) by SI unit
+_UFF_TYPES = {"s": 17, "Hz": 18, "m": 8, "m/s": 11, "m/s^2": 12, "N": 13, "Pa": 15}
+
+
+def _uff_label(rec: dict, key: str) -> str | None:
+    v = str(rec.get(key) or "").strip()
+    return None if not v or v.upper() == "NONE" else v
+
+
+def _is_frf(rec: dict) -> bool:
+    """A UFF58 record is an FRF (func_type 4), or spectral (complex, or an abscissa in
+    Hz), rather than a time series."""
+    return rec.get("func_type") == 4 or np.iscomplexobj(rec["data"]) or \
+        rec.get("abscissa_spec_data_type") == 18
 
 
 def read_uff_levels(path: str | Path) -> list[Measurement]:
-    """Every measurement in a UFF file: one record (UFF58, time series) per channel, and per
-    level where the records say so (``id2 = "level=0.3"``, as :func:`write_uff` writes)."""
+    """Every measurement in a UFF file: one UFF58 record per channel, and per level where
+    the records say so (``id2 = "level=0.3"``, as :func:`write_uff` writes).
+
+    Time series (a ``force`` record and the responses) make a measurement per level; FRF
+    records (function type 4, complex, frequency in Hz) an FRF-only one per level and
+    direction (``id2 = "level=0.3 direction=down kind=stepped_sine"``), output per input
+    as the record's ordinate and denominator labels say."""
     import pyuff
 
     path = Path(path)
@@ -186,28 +207,35 @@ def read_uff_levels(path: str | Path) -> list[Measurement]:
     records = [s for s in sets if s.get("type") == 58]
     if not records:
         raise MeasurementError(file, "no UFF58 (function at nodal DOF) records")
-    groups: dict[float | None, list[dict]] = {}
+    groups: dict[tuple, list[dict]] = {}
     for rec in records:
-        m = _LEVEL.search(str(rec.get("id2") or ""))
-        groups.setdefault(float(m.group(1)) if m else None, []).append(rec)
-    if None in groups and len(groups) > 1:
-        raise MeasurementError(file, "some records carry a level (id2 = 'level=...') and "
-                                     "others do not")
+        tag = str(rec.get("id2") or "")
+        m, d = _LEVEL.search(tag), _DIRECTION.search(tag)
+        key = (_is_frf(rec), float(m.group(1)) if m else None,
+               d.group(1).lower() if d and _is_frf(rec) else None)
+        groups.setdefault(key, []).append(rec)
+    for frf in (False, True):
+        levels = {k[1] for k in groups if k[0] == frf}
+        if None in levels and len(levels) > 1:
+            raise MeasurementError(file, "some records carry a level (id2 = 'level=...') "
+                                         "and others do not")
     side = _sidecar(path)
     out = []
-    for level, recs in groups.items():
+    for (frf, level, direction), recs in groups.items():
         where = file if level is None else f"{file} (level {level:g})"
+        if frf:
+            said = ", ".join(x for x in (level is not None and f"level {level:g}",
+                                         direction) if x)
+            out.append(_uff_frfs(f"{file} ({said})" if said else file, recs,
+                                 level if level is not None else side.get("level"),
+                                 direction))
+            continue
         columns, unit_map, t = {}, {}, None
         for rec in recs:
-            name = str(rec.get("id1") or rec.get("rsp_ent_name") or "").strip()
-            if not name:
-                raise MeasurementError(where, "a UFF58 record has no name (id1)")
-            if np.iscomplexobj(rec["data"]):
-                raise MeasurementError(where, "complex (spectral) record; expected a time "
-                                              "series", name)
+            name = _uff_name(where, rec)
             x = np.asarray(rec["x"], float)
             y = np.asarray(rec["data"], float)
-            unit = str(rec.get("ordinate_axis_units_lab") or "").strip() or None
+            unit = _uff_label(rec, "ordinate_axis_units_lab")
             key = "force" if name.lower() in ("force", "excitation", "input") else name
             if key in columns:
                 raise MeasurementError(where, "two records for the same channel", key)
@@ -220,35 +248,94 @@ def read_uff_levels(path: str | Path) -> list[Measurement]:
         columns["time"] = t
         out.append(_assemble(where, columns, unit_map, side.get("fs"),
                              level if level is not None else side.get("level")))
-    return sorted(out, key=lambda m: (m.level is None, m.level or 0.0))
+    return sorted(out, key=lambda m: (m.level is None, m.level or 0.0, m.frf is not None,
+                                      getattr(m.frf, "direction", None) or ""))
+
+
+def _uff_name(where: str, rec: dict) -> str:
+    name = str(rec.get("id1") or rec.get("rsp_ent_name") or "").strip()
+    if not name or name.upper() == "NONE":
+        raise MeasurementError(where, "a UFF58 record has no name (id1)")
+    return name
+
+
+def _uff_frfs(where: str, recs: list[dict], level, direction: str | None) -> Measurement:
+    """An FRF-only measurement from UFF58 FRF records of one level and direction."""
+    channels, units, file_units, f = {}, {}, {}, None
+    kind = None
+    for rec in recs:
+        name = _uff_name(where, rec)
+        if name in channels:
+            raise MeasurementError(where, "two FRF records for the same channel", name)
+        out_u = _uff_label(rec, "ordinate_axis_units_lab")
+        in_u = _uff_label(rec, "orddenom_axis_units_lab") or "N"
+        in_si = _target("force", in_u)
+        if units.setdefault("force", in_si) != in_si:
+            raise MeasurementError(where, f"FRF per {in_u}, the others per "
+                                          f"{units['force']}", name)
+        units[name] = _target(name, out_u)
+        factor = _factor(where, name, out_u, units[name]) / \
+            _factor(where, "force", in_u, in_si)
+        channels[name] = np.asarray(rec["data"], complex) * factor
+        file_units[name], file_units["force"] = out_u or units[name], in_u
+        x = np.asarray(rec["x"], float)
+        if f is None:
+            f = x
+        elif len(x) != len(f) or np.max(np.abs(x - f)) > 1e-9 * max(1.0, abs(f[-1])):
+            raise MeasurementError(where, "frequency lines differ from the first record",
+                                   name)
+        m = _KIND.search(str(rec.get("id2") or ""))
+        kind = kind or (m.group(1).lower() if m else None)
+    record = FRFRecord.checked(where, f, channels, units, kind=kind, direction=direction,
+                               meta={"source": "UFF58"})
+    return Measurement(file=where, signals=record, units=file_units,
+                       level=None if level is None else float(level))
 
 
 def read_uff(path: str | Path) -> Measurement:
     """A UFF file holding one measurement (see :func:`read_uff_levels` for several)."""
     found = read_uff_levels(path)
     if len(found) > 1:
-        raise MeasurementError(str(path), f"holds {len(found)} levels; load it with "
-                                          "load_all()")
+        raise MeasurementError(str(path), f"holds {len(found)} measurements (levels or "
+                                          f"sweep directions); load it with load_all()")
     return found[0]
 
 
-def write_uff(path: str | Path, measurements: list[tuple[Signals, float | None]]) -> Path:
-    """Write one or several levels as UFF58 time records (one per channel and level, the
-    level in ``id2``)."""
+def write_uff(path: str | Path, measurements: list[tuple[Signals | FRFRecord, float | None]]
+              ) -> Path:
+    """Write one or several levels as UFF58 records, one per channel and level (the level
+    in ``id2``): time records of :class:`~sensfw.models.base.Signals`, FRF records (function
+    type 4, complex, on the record's lines; direction and kind in ``id2`` too) of an
+    :class:`~sensfw.measure.measurement.FRFRecord`."""
     import pyuff
 
     path = Path(path)
     if path.exists():
         path.unlink()
     uff = pyuff.UFF(str(path))
-    for sig, level in measurements:
+    for rec, level in measurements:
         tag = "" if level is None else f"level={level:.10g}"
-        for name, y in [("force", sig.force), *sig.channels.items()]:
-            unit = sig.units.get(name, _target(name))
+        if isinstance(rec, FRFRecord):
+            tag = " ".join(x for x in (tag, rec.direction and f"direction={rec.direction}",
+                                       rec.kind and f"kind={rec.kind}") if x)
+            inp = rec.units.get("force", "N")
+            for name, h in rec.channels.items():
+                unit = rec.units.get(name, ACCEL_UNIT)
+                uff.write_sets(pyuff.prepare_58(
+                    func_type=4, id1=name, id2=tag, rsp_node=1, rsp_dir=1, ref_node=1,
+                    ref_dir=1, data=np.asarray(h, complex), x=np.asarray(rec.f, float),
+                    abscissa_spacing=0, abscissa_spec_data_type=18,
+                    ordinate_spec_data_type=_UFF_TYPES.get(unit, 0),
+                    orddenom_spec_data_type=_UFF_TYPES.get(inp, 0),
+                    ordinate_axis_units_lab=unit, orddenom_axis_units_lab=inp, binary=0),
+                    mode="add")
+            continue
+        for name, y in [("force", rec.force), *rec.channels.items()]:
+            unit = rec.units.get(name, _target(name))
             uff.write_sets(pyuff.prepare_58(
                 func_type=1, id1=name, id2=tag, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1,
-                data=np.asarray(y, float), x=sig.t, abscissa_spacing=1, abscissa_min=0.0,
-                abscissa_inc=1 / sig.fs, abscissa_spec_data_type=17,
+                data=np.asarray(y, float), x=rec.t, abscissa_spacing=1, abscissa_min=0.0,
+                abscissa_inc=1 / rec.fs, abscissa_spec_data_type=17,
                 ordinate_spec_data_type=13 if name == "force" else 12,
                 orddenom_spec_data_type=13, ordinate_axis_units_lab=unit, binary=0),
                 mode="add")
@@ -259,7 +346,9 @@ def load(path: str | Path) -> Measurement:
     """A measurement file, by extension: ``.csv``/``.txt``, ``.uff``/``.unv``, or ``.mat``
     (LMS Test.Lab export), or a folder of LMS ``.mat`` exports (one level: e.g.
     ``TimeShaker.mat`` with the excitation and ``Time.mat`` with the responses), read by
-    :func:`sensfw.measure.lms.read_lms`."""
+    :func:`sensfw.measure.lms.read_lms`. A file of FRFs without time data (an LMS
+    ``FRF.mat`` alone, UFF58 FRF records) gives an FRF-only measurement
+    (``Measurement.frf``)."""
     path = Path(path)
     ext = path.suffix.lower()
     if path.is_dir() or ext == ".mat":
