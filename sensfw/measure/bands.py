@@ -139,3 +139,13 @@ def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
     _, _, _, resid = _local_fit(sig, channel)
     q = float(np.quantile(resid[1:], quantile)) / -np.log1p(-quantile)
     return float(np.sqrt(q / len(sig.force)))
+
+
+def band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) -> float:
+    """RMS of ``x`` within ``band`` (Parseval over the record's DFT lines in the band): the
+    level of a random excitation over the band a comparison looks at."""
+    X = np.fft.rfft(np.asarray(x, float))
+    f = np.fft.rfftfreq(len(x), 1 / fs)
+    sel = (f >= band[0]) & (f <= band[1]) & (f > 0)
+    weight = np.where((f[sel] == fs / 2), 1.0, 2.0)  # the Nyquist line is not mirrored
+    return float(np.sqrt(np.sum(weight * np.abs(X[sel]) ** 2)) / len(x))

@@ -11,126 +11,44 @@ nonlinearity).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..models.base import Signals
+from ..signal.stepped import steps_of
 from .bands import (
     FRACTIONS,
     SMOOTH,
     analysis_bands,
     band_frf_db,
     band_noise,
+    band_rms,
     frf_db,
     noise_sigma,
     octave_bands,
     third_octave_bands,
 )
-from .distortion import dc_offset, dc_standard_error, harmonic_floor, harmonics
+from .comparison import ERROR_DEFINITION, Comparison, LevelComparison, display_unit
+from .distortion import (
+    dc_offset,
+    dc_standard_error,
+    harmonic_floor,
+    harmonic_rows,
+    harmonics,
+    thd,
+)
+from .lines import compare_lines, jump
+from .measurement import FRFRecord
 from .resonance import MIN_FIT_R2, fit_resonances, match_resonances, resonances
 from .signatures import amplitude_dependence
 
-__all__ = ["FRACTIONS", "MIN_FIT_R2", "SMOOTH", "Comparison", "LevelComparison",
+__all__ = ["ERROR_DEFINITION", "FRACTIONS", "MIN_FIT_R2", "SMOOTH", "Comparison",
+           "LevelComparison",
            "analysis_bands", "band_frf_db", "band_noise", "compare_level",
            "compare_measurements", "dc_offset", "dc_standard_error", "fit_resonances",
            "frf_db", "harmonic_floor", "harmonics", "match_resonances", "noise_sigma",
            "octave_bands", "resonances", "third_octave_bands"]
-
-
-@dataclass
-class LevelComparison:
-    """Model against measurement at one excitation level."""
-
-    level: float
-    file: str
-    f: np.ndarray
-    db_model: np.ndarray
-    db_measured: np.ndarray
-    bands: list[dict]
-    resonances: list[dict]
-    harmonics: list[dict]
-    thd_model: float | None
-    thd_measured: float | None
-    notes: list[str] = field(default_factory=list)
-    unit: str = "N"  # of the excitation channel (the FRF's denominator)
-    output_unit: str = "m/s²"  # of the compared channel (the FRF's numerator)
-    dc_model: float = 0.0
-    dc_measured: float = 0.0
-    dc_standard_error: float = 0.0  # of dc_measured, from the record's noise
-    peaks_model: list[dict] = field(default_factory=list)
-    peaks_measured: list[dict] = field(default_factory=list)
-
-    dynamic_range: float = 35.0
-
-    #: largest standard error (dB) of a used band from the measurement's own noise
-    #: (:func:`band_noise`; 1.5 dB is a relative error of 0.25, an SNR of 12 dB; the
-    #: first-order standard error underestimates the spread beyond that)
-    noise_limit_db: float = 1.5
-    #: largest total scatter (dB) of a used band's measured FRF (noise and distortion, before
-    #: the model's share is taken out): beyond it the measured band level says little
-    scatter_limit_db: float = 3.0
-
-    @property
-    def used_bands(self) -> list[dict]:
-        """Bands within ``dynamic_range`` dB of the strongest measured band whose own noise
-        error is below ``noise_limit_db`` and whose total scatter is below
-        ``scatter_limit_db`` (weaker ones are noise-limited on a shaker rig)."""
-        top = max(b["measured_db"] for b in self.bands)
-
-        def ok(b, key, limit):
-            return b.get(key) is None or b[key] <= limit
-
-        return [b for b in self.bands if b["measured_db"] >= top - self.dynamic_range
-                and ok(b, "noise_db", self.noise_limit_db)
-                and ok(b, "scatter_db", self.scatter_limit_db)]
-
-    @property
-    def noise_floor_db(self) -> float:
-        """The FRF error (RMS over the used bands) that the measurement's noise alone
-        exceeds with 0.1 % probability: a correct model stays below it. The band errors of a
-        correct model are independent with the standard errors ``noise_db``, so their mean
-        square is ``chi^2_n / n`` times the mean square standard error."""
-        from scipy.stats import chi2
-
-        v = [b["noise_db"] for b in self.used_bands if b.get("noise_db") is not None]
-        if not v:
-            return 0.0
-        n = len(v)
-        return float(np.sqrt(np.mean(np.square(v)) * chi2.ppf(0.999, n) / n))
-
-    @property
-    def frf_rms_db(self) -> float:
-        """RMS of the band errors within the dynamic range."""
-        return float(np.sqrt(np.mean([b["mean_db"] ** 2 for b in self.used_bands])))
-
-    def frf_rms_db_between(self, fmin: float, fmax: float) -> float:
-        """RMS over the lines in ``[fmin, fmax]`` of the dB difference model - measurement
-        of the smoothed FRFs (:func:`frf_db`): the error of one band as a user states it
-        ("dB RMS over 80-105 Hz")."""
-        sel = (self.f >= fmin) & (self.f <= fmax)
-        if not sel.any():
-            raise ValueError(f"no FRF line in {fmin:g}-{fmax:g} Hz (the comparison covers "
-                             f"{self.f[0]:g}-{self.f[-1]:g} Hz)")
-        d = self.db_model[sel] - self.db_measured[sel]
-        return float(np.sqrt(np.mean(d * d)))
-
-    def to_dict(self) -> dict:
-        used = {b["centre_hz"] for b in self.used_bands}
-        bands = [{**b, "used": b["centre_hz"] in used} for b in self.bands]
-        return {"level": self.level, "file": self.file,
-                "frf_error_db": {"rms": self.frf_rms_db, "dynamic_range_db": self.dynamic_range,
-                                 "noise_floor_db": self.noise_floor_db,
-                                 "rms_all_bands": float(np.sqrt(np.mean(
-                                     [b["mean_db"] ** 2 for b in self.bands]))),
-                                 "bands": bands},
-                "resonances": self.resonances, "harmonics": self.harmonics,
-                "thd": {"model": self.thd_model, "measured": self.thd_measured,
-                        "difference_db": 20 * np.log10(self.thd_model / self.thd_measured)
-                        if self.thd_model and self.thd_measured else None},
-                "dc_offset": {"model": self.dc_model, "measured": self.dc_measured,
-                              "standard_error": self.dc_standard_error},
-                "input_unit": self.unit, "notes": self.notes}
 
 
 @dataclass
@@ -169,15 +87,23 @@ def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges)
     return hit[1], hit[2]
 
 
-def _unit(u: str) -> str:
-    return u.replace("^2", "²")
-
-
-def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[float, float],
-                  level: float, file: str = "", detail: bool = True) -> LevelComparison:
+def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
+                  band: tuple[float, float], level: float, file: str = "",
+                  detail: bool = True, error_band: tuple[float, float] | None = None
+                  ) -> LevelComparison:
     """The model's record against the measured one on ``channel`` (module docstring).
     ``detail=False`` (a calibration's many evaluations) leaves out the model's resonance
-    fits, which no residual uses: the comparison's ``resonances`` are then empty."""
+    fits, which no residual uses: the comparison's ``resonances`` are then empty.
+
+    ``measured`` is a measurement's ``signals``: time signals, or the
+    :class:`~sensfw.measure.measurement.FRFRecord` of an FRF-only measurement; a
+    stepped-sine record (an FRF record, or time signals whose instantaneous frequency
+    steps, as :func:`sensfw.measure.checks.prepare` leaves them) is compared on its lines
+    (:func:`sensfw.measure.lines.compare_lines`: the model must have been driven by the
+    measurement's ``drive``). ``error_band`` is the band of the record's error figure
+    (:attr:`LevelComparison.error_db`; default: every compared line)."""
+    if isinstance(measured, FRFRecord) or steps_of(measured.f_inst, measured.fs) is not None:
+        return compare_lines(measured, model, channel, band, level, file, detail, error_band)
     edges = analysis_bands(*band)
     mx, floor = _measured_side(measured, channel, band, edges)
     mm = _side(model, channel, band, edges, detail)
@@ -204,56 +130,35 @@ def compare_level(measured: Signals, model: Signals, channel: str, band: tuple[f
     pm, px = mm.peaks, mx.peaks
     res = match_resonances(pm, px) if detail else []
     hm, hx = mm.harmonics, mx.harmonics
-    rows = []
-    for k in sorted(set(hm) & set(hx)):
-        rows.append({"order": k, "model": hm[k], "measured": hx[k],
-                     "model_ratio": hm[k] / hm[1] if hm.get(1) else None,
-                     "measured_ratio": hx[k] / hx[1] if hx.get(1) else None,
-                     "measured_floor_ratio": floor.get(k),
-                     "difference_db": float(20 * np.log10(hm[k] / hx[k]))
-                     if hm[k] > 0 and hx[k] > 0 else None})
-
-    def thd(h):
-        return float(100 * np.sqrt(sum(v**2 for k, v in h.items() if k >= 2)) / h[1]) \
-            if h.get(1) and len(h) > 1 else None
-
+    rows = harmonic_rows(hm, hx, floor)
     return LevelComparison(level=level, file=file, f=f, db_model=dbm, db_measured=dbx,
                            bands=bands, resonances=res, harmonics=rows, thd_model=thd(hm),
                            thd_measured=thd(hx), unit=measured.units.get("force", "N"),
-                           output_unit=_unit(measured.units.get(channel, "m/s^2")),
+                           output_unit=display_unit(measured.units.get(channel, "m/s^2")),
                            dc_model=dc_offset(model, channel),
                            dc_measured=dc_offset(measured, channel),
                            dc_standard_error=dc_standard_error(measured, channel),
-                           peaks_model=pm,
-                           peaks_measured=px)
+                           peaks_model=pm, peaks_measured=px,
+                           kind="random" if measured.f_inst is None else "sweep",
+                           level_rms=band_rms(measured.sweep().force, measured.fs, band),
+                           band=tuple(band), error_band=error_band)
 
 
-@dataclass
-class Comparison:
-    """The model against every measured level (what ``sensfw compare`` writes)."""
-
-    study: str
-    output: str
-    levels: list[LevelComparison]
-    pairs: list[tuple[float, Signals, Signals]]  # (level, measured, model) signals
-    amplitude: dict | None  # :func:`sensfw.measure.signatures.amplitude_dependence`
-    notes: list[str]
-
-    def to_dict(self) -> dict:
-        return {"study": self.study, "output": self.output,
-                "levels": [c.to_dict() for c in self.levels],
-                "amplitude_dependence": self.amplitude, "notes": self.notes}
-
-
-def compare_measurements(study, measurements, runner, variant=None) -> Comparison:
+def compare_measurements(study, measurements, runner, variant=None,
+                         error_band: tuple[float, float] | None = None) -> Comparison:
     """Simulate the study's model (with ``variant``: effects, parameter values) for every
-    prepared measurement (:func:`sensfw.measure.session.load_measurements`) and compare."""
+    prepared measurement (:func:`sensfw.measure.session.load_measurements`) and compare:
+    per record on the study's output over the study's band, the error over ``error_band``
+    (default: the study's band); the jump between up and down sweeps at each level that
+    has both; the amplitude dependence over the levels (one record per level: the up
+    sweep where there are two)."""
     from ..errors import SensfwError
     from .session import Variant, simulate
 
     variant = variant or Variant()
     sims = simulate(study, runner, [variant], measurements)
     ex = study.excitation
+    band = (ex.f0, ex.f1)
     levels, pairs, notes = [], [], []
     for i, m in enumerate(measurements):
         notes += [f"{m.file}: {n}" for n in m.notes]
@@ -261,8 +166,21 @@ def compare_measurements(study, measurements, runner, variant=None) -> Compariso
         if sig is None:
             raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
                               f"{m.input_unit}); its error is in the run store")
-        levels.append(compare_level(m.signals, sig, study.output, (ex.f0, ex.f1), m.level,
-                                    m.file))
+        c = compare_level(m.signals, sig, study.output, band, m.level, m.file,
+                          error_band=error_band or band)
+        if m.sweep is not None and c.kind == "sweep":
+            c.kind = m.sweep.kind
+        levels.append(c)
         pairs.append((m.level, m.signals, sig))
+    jumps = []
+    for lv in sorted({c.level for c in levels}):
+        by = {c.direction: c for c in levels if c.level == lv and c.stepped}
+        if "up" in by and "down" in by:
+            jumps.append(jump(by["up"], by["down"]))
+    one = {}
+    for c in levels:  # one record per level for the amplitude dependence
+        if c.level not in one or c.direction == "up":
+            one[c.level] = c
     return Comparison(study=study.name, output=study.output, levels=levels, pairs=pairs,
-                      amplitude=amplitude_dependence(levels), notes=notes)
+                      amplitude=amplitude_dependence(list(one.values())), notes=notes,
+                      error_band=error_band or band, jumps=jumps)

@@ -72,3 +72,26 @@ def dc_standard_error(sig: Signals, channel: str) -> float:
     """Standard error of :func:`dc_offset` from the output noise: ``sigma / sqrt(n)`` for
     the mean over the sweep's ``n`` samples (:func:`noise_sigma`)."""
     return noise_sigma(sig, channel) / float(np.sqrt(len(sig.sweep().force)))
+
+
+def harmonic_rows(hm: dict[int, float], hx: dict[int, float],
+                  floor: dict[int, float] | None = None) -> list[dict]:
+    """The harmonic table of a comparison: per order both sides have, the model's and the
+    measured amplitude (``{1: P_1, k: P_k}`` as :func:`harmonics` gives them), their
+    ratios to ``P_1``, the measured ratio's noise floor and the difference (dB)."""
+    rows = []
+    for k in sorted(set(hm) & set(hx)):
+        rows.append({"order": k, "model": hm[k], "measured": hx[k],
+                     "model_ratio": hm[k] / hm[1] if hm.get(1) else None,
+                     "measured_ratio": hx[k] / hx[1] if hx.get(1) else None,
+                     "measured_floor_ratio": (floor or {}).get(k),
+                     "difference_db": float(20 * np.log10(hm[k] / hx[k]))
+                     if hm[k] > 0 and hx[k] > 0 else None})
+    return rows
+
+
+def thd(h: dict[int, float]) -> float | None:
+    """THD (%) of order amplitudes ``{1: P_1, k: P_k}``: ``100 sqrt(sum_k>=2 P_k^2) / P_1``
+    (Eq. 16), None without harmonics."""
+    return float(100 * np.sqrt(sum(v**2 for k, v in h.items() if k >= 2)) / h[1]) \
+        if h.get(1) and len(h) > 1 else None

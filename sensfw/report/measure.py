@@ -11,44 +11,99 @@ import pandas as pd
 from .html import Page
 
 
-def frf_overlay(comparisons, extra=None, title="FRF: model against measurement"):
+def frf_overlay(comparisons, extra=None, title="FRF: model against measurement",
+                error_band=None):
+    """Measured (solid) and model (dashed) FRFs of every record; stepped-sine and FRF-only
+    records on their lines (markers); the error band shaded."""
     fig, ax = plt.subplots(figsize=(10, 4.5))
     colors = plt.cm.tab10(np.arange(10))
     for i, c in enumerate(comparisons):
-        ax.semilogx(c.f, c.db_measured, color=colors[i % 10], lw=1.4,
-                    label=f"measured {c.level:.3g} {c.unit}")
+        mark = "o" if getattr(c, "stepped", False) and len(c.f) <= 120 else None
+        label = getattr(c, "level_text", f"{c.level:.3g} {c.unit}")
+        ax.semilogx(c.f, c.db_measured, color=colors[i % 10], lw=1.4, marker=mark, ms=3,
+                    label=f"measured, {label}")
         ax.semilogx(c.f, c.db_model, color=colors[i % 10], lw=1.0, ls="--",
-                    label=f"model {c.level:.3g} {c.unit}")
+                    label=f"model, {label}")
     for label, cs in (extra or {}).items():
         for c in cs:
             ax.semilogx(c.f, c.db_model, lw=1.0, ls=":",
                         label=f"{label} {c.level:.3g} {c.unit}")
+    if error_band:
+        ax.axvspan(*error_band, color="0.5", alpha=0.08, lw=0, label="error band")
     ax.set_xlabel("frequency (Hz)")
     if comparisons:
         c = comparisons[0]
         ax.set_ylabel(f"|H| (dB re 1 ({c.output_unit})/{c.unit})")
+    _plain_hz(ax, comparisons)
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     return fig
 
 
+def _plain_hz(ax, comparisons) -> None:
+    """Frequency ticks written plainly on a log axis that spans less than a decade."""
+    from matplotlib.ticker import FormatStrFormatter
+
+    f = [x for c in comparisons for x in (c.f[0], c.f[-1])]
+    if f and max(f) / min(f) < 10:
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
+        ax.tick_params(axis="x", which="both", labelsize=8)
+
+
 def band_errors(comparisons):
+    """Model minus measured FRF per band (bars), with the measurement's standard error of
+    each band where it is known (error bars)."""
     fig, ax = plt.subplots(figsize=(10, 3.4))
     width = 0.8 / max(len(comparisons), 1)
+    ref = max(comparisons, key=lambda c: len(c.bands)) if comparisons else None
+    centres = [b["centre_hz"] for b in ref.bands] if ref else []
     for i, c in enumerate(comparisons):
-        x = np.arange(len(c.bands)) + i * width
-        ax.bar(x, [b["mean_db"] for b in c.bands], width, label=f"{c.level:.3g} {c.unit}")
-    if comparisons:
-        ax.set_xticks(np.arange(len(comparisons[0].bands)),
-                      [f"{b['centre_hz']:.0f}" for b in comparisons[0].bands], rotation=60,
-                      fontsize=7)
+        pos = {b["centre_hz"]: j for j, b in enumerate(ref.bands)}
+        x = np.array([pos.get(b["centre_hz"], np.nan) for b in c.bands]) + i * width
+        err = [b["noise_db"] or 0.0 for b in c.bands]
+        ax.bar(x, [b["mean_db"] for b in c.bands], width,
+               yerr=err if any(err) else None, error_kw={"lw": 0.8, "capsize": 1.5},
+               label=getattr(c, "level_text", f"{c.level:.3g} {c.unit}"))
+    if ref:
+        step = max(1, len(centres) // 30)
+        ax.set_xticks(np.arange(len(centres))[::step],
+                      [f"{x:.3g}" for x in centres][::step], rotation=60, fontsize=7)
     ax.axhline(0, color="k", lw=0.8)
-    ax.set_xlabel("one-third-octave band centre (Hz)")
+    ax.set_xlabel("band centre (Hz)")
     ax.set_ylabel("model - measured (dB)")
-    ax.set_title("FRF error per one-third-octave band")
-    ax.legend(fontsize=8)
+    ax.set_title("Where the model fails: mean FRF difference per band (error bars: the "
+                 "measurement's standard error)", fontsize=10)
+    ax.legend(fontsize=7)
     ax.grid(True, axis="y", alpha=0.3)
+    return fig
+
+
+def jump_plot(comparisons, jumps):
+    """Up (solid) and down (dashed) FRFs of each level that has both, measured (left) and
+    model (right), on the lines both sweeps share."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 3.8), sharey=True)
+    colors = plt.cm.tab10(np.arange(10))
+    for i, j in enumerate(jumps):
+        by = {c.direction: c for c in comparisons if c.level == j["level"] and c.stepped}
+        for ax, key, who in ((axes[0], "db_measured", "measured"),
+                             (axes[1], "db_model", "model")):
+            for d, ls in (("up", "-"), ("down", "--")):
+                c = by[d]
+                ax.plot(c.f, getattr(c, key), ls=ls, color=colors[i % 10], lw=1.2,
+                        marker="." if len(c.f) <= 120 else None,
+                        label=f"{j['level']:g} {j['unit']} {d}")
+            band = (j[who] or {}).get("hysteresis_hz")
+            if band:
+                ax.axvspan(*band, color=colors[i % 10], alpha=0.1, lw=0)
+            ax.set_title(who, fontsize=9)
+            ax.set_xlabel("frequency (Hz)")
+            ax.grid(True, alpha=0.3)
+    if jumps:
+        c = next(c for c in comparisons if c.stepped)
+        axes[0].set_ylabel(f"|H| (dB re 1 ({c.output_unit})/{c.unit})")
+    axes[0].legend(fontsize=7)
     return fig
 
 
@@ -74,7 +129,7 @@ def order_spectra(pairs, channel):
     return fig
 
 
-def spectrograms(meas, model, channel, level):
+def spectrograms(meas, model, channel, label: str):
     from ..signal import spectrogram
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 3.8), sharey=True)
@@ -83,7 +138,7 @@ def spectrograms(meas, model, channel, level):
         f, t, S = spectrogram(sig.channel(channel), sig.fs)
         vmax = np.nanmax(S)
         im = ax.pcolormesh(t, f, S, shading="auto", vmin=vmax - 80, vmax=vmax)
-        ax.set_title(f"{who}, {level:.3g} {meas.units.get('force', 'N')}")
+        ax.set_title(f"{who}, {label}", fontsize=9)
         ax.set_xlabel("time (s)")
     axes[0].set_ylabel("frequency (Hz)")
     fig.colorbar(im, ax=axes, label="dB")
@@ -119,7 +174,9 @@ def amplitude_plot(amplitude: dict, unit: str = "N"):
     level with the measured noise floor (dotted) in the last row."""
     table = amplitude["table"]
     tracks = _plotted_tracks(table)
-    rows = max(len(tracks), 1) + 1
+    harm = table["harmonics"]
+    has_harm = any(h[f"h{k}_{w}"] for h in harm for k in (2, 3) for w in ("measured", "model"))
+    rows = len(tracks) + int(has_harm)
     fig = plt.figure(figsize=(11, 2.3 * rows + 1.2))
     grid = fig.add_gridspec(rows, 2, hspace=0.55, wspace=0.25)
     colors = plt.cm.tab10(np.arange(10))
@@ -152,8 +209,9 @@ def amplitude_plot(amplitude: dict, unit: str = "N"):
             ax.tick_params(labelsize=8)
             if i == 0 and col == 0:
                 ax.legend(fontsize=7)
+    if not has_harm:
+        return fig
     ax = fig.add_subplot(grid[rows - 1, :])
-    harm = table["harmonics"]
     lv = [h["level"] for h in harm]
     for k, c in ((2, colors[3]), (3, colors[4])):
         def db(key, k=k):
@@ -202,23 +260,35 @@ def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 
 def amplitude_section(page, amplitude: dict, unit: str = "N") -> None:
-    """Sentences, plot and tables of :func:`sensfw.measure.signatures.amplitude_dependence`."""
+    """Sentences, plot and tables of :func:`sensfw.measure.signatures.amplitude_dependence`
+    (one line where there is a single level, or nothing to plot)."""
     page.h2("Amplitude dependence")
+    levels = amplitude.get("levels") or []
+    if len(levels) < 2:
+        page.p("One level only: nothing to compare across levels.")
+        return
     found = amplitude.get("classes") or {}
     if found:
         page.p("Signature classes of the discrepancy: " + ", ".join(
             c.replace("_", " ") for c in found) + ".", "note")
     for line in amplitude.get("sentences", []):
         page.p(line, "note" if found else "ok")
-    page.figure(amplitude_plot(amplitude, unit),
-                "Resonance frequency and damping ratio (single-mode fit where both FRFs "
-                "allow it, else half-power) and harmonic ratios against the excitation "
-                "level: measured (solid) and model (dashed). The classes judge the "
-                "measured trend relative to the model's own.")
+    table = amplitude["table"]
+    has_harm = any(h[f"h{k}_{w}"] for h in table["harmonics"] for k in (2, 3)
+                   for w in ("measured", "model"))
+    if _plotted_tracks(table) or has_harm:
+        page.figure(amplitude_plot(amplitude, unit),
+                    "Resonance frequency and damping ratio (single-mode fit where both FRFs "
+                    "allow it, else half-power)" + (" and harmonic ratios" if has_harm else "")
+                    + " against the excitation level: measured (solid) and model (dashed). "
+                    "The classes judge the measured trend relative to the model's own.")
+    else:
+        page.p("No resonance prominent at two levels or more, and no harmonics: no plot.")
     res, harm = amplitude_frames(amplitude)
     if not res.empty:
         page.table(res, index=False)
-    page.table(harm, index=False)
+    if has_harm:
+        page.table(harm, index=False)
 
 
 def _frame(rows, cols=None) -> pd.DataFrame:
@@ -226,30 +296,122 @@ def _frame(rows, cols=None) -> pd.DataFrame:
     return frame[cols] if cols else frame
 
 
-def write_compare_report(study, comparisons, pairs, amplitude, notes, path) -> Path:
-    page = Page(f"sensfw: model against measurement ({study.name})",
-                f"output channel {study.output}; {len(comparisons)} excitation level(s)")
-    for n in notes:
-        page.note(n)
-    page.figure(frf_overlay(comparisons), "Measured (solid) and simulated (dashed) FRFs, Hv, "
-                "1/24-octave smoothed.")
-    page.figure(band_errors(comparisons), "Where the model fails: FRF error per band.")
-    if amplitude:
-        unit = comparisons[0].unit if comparisons else "N"
-        amplitude_section(page, amplitude, unit)
+def _resonance_frame(rows) -> pd.DataFrame:
+    """A record's resonance table, headed plainly."""
+    names = {"measured_hz": "measured (Hz)", "model_hz": "model (Hz)",
+             "shift_pct": "model vs measured (%)", "measured_damping": "ζ measured",
+             "model_damping": "ζ model", "note": ""}
+    frame = pd.DataFrame(rows)[list(names)].rename(columns=names)
+    return frame.astype(object).where(frame.notna(), "")
+
+
+def _summary(comparisons) -> pd.DataFrame:
+    """One row per record: its level as what it is, the error, the resonance."""
+    rows = []
     for c in comparisons:
-        thd = "no THD (not a sweep)" if c.thd_model is None else \
-            f"THD model {c.thd_model:.2f} % / measured {c.thd_measured:.2f} %"
-        page.h3(f"Level {c.level:.3g} {c.unit} ({c.file}): FRF error {c.frf_rms_db:.2f} dB "
-                f"RMS (bands within {c.dynamic_range:g} dB of the strongest and above the "
-                f"noise; noise floor {c.noise_floor_db:.2f} dB), {thd}")
-        page.table(_frame(c.resonances).fillna(""), index=False)
-        page.table(_frame(c.harmonics), index=False)
-    page.figure(order_spectra(pairs, study.output), "Order spectra, measured and simulated.")
-    for level, meas, model in pairs:
-        page.figure(spectrograms(meas, model, study.output, level),
-                    "Spectrograms side by side (Fig. 11 style).")
+        res = [r for r in c.resonances if r["measured_hz"] and r["model_hz"]]
+        peaks = {p["frequency"]: p["peak_db"] for p in c.peaks_measured}
+        # the strongest measured peak that has a model partner
+        r = max(res, key=lambda r: peaks.get(r["measured_hz"], -np.inf)) if res else None
+        rows.append({
+            "record": c.level_text, "file": Path(c.file).name if c.file else "",
+            "FRF error (dB)": f"{c.error_db:.2f}",
+            "resonance measured (Hz)": f"{r['measured_hz']:.2f}" if r else "",
+            "model (Hz)": f"{r['model_hz']:.2f}" if r else "",
+            "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
+            if c.thd_measured is not None and c.thd_model is not None else ""})
+    return pd.DataFrame(rows)
+
+
+def write_compare_report(study, result, path) -> Path:
+    """The compare report of a :class:`~sensfw.measure.comparison.Comparison`: a summary
+    table (one error figure per record, defined once), the FRFs, where the model fails,
+    up/down jumps, the amplitude dependence, then per record its tables, order spectra and
+    spectrograms; a section with nothing to show says so in one line."""
+    from ..measure.comparison import ERROR_DEFINITION
+    from ..measure.lines import jump_text
+
+    comparisons, pairs = result.levels, result.pairs
+    band = result.error_band
+    page = Page(f"sensfw: model against measurement ({study.name})",
+                f"output channel {study.output}; {len(comparisons)} record(s)"
+                + (f"; error band {band[0]:g}-{band[1]:g} Hz" if band else ""))
+    page.table(_summary(comparisons), index=False)
+    page.p(ERROR_DEFINITION + (f" (here {band[0]:g}-{band[1]:g} Hz)." if band else "."))
+    if result.notes:
+        page.h2("Records and how the model was driven")
+        for n in result.notes:
+            page.p(n)
+    page.figure(frf_overlay(comparisons, error_band=band),
+                "Measured (solid) and simulated (dashed) FRFs: Hv smoothed to 1/24 octave for "
+                "time records, the steady-state lines (markers) of stepped-sine and FRF-only "
+                "records.")
+    if any(c.bands for c in comparisons):
+        page.figure(band_errors(comparisons), "Mean FRF difference per band.")
+    stepped = [c for c in comparisons if c.stepped]
+    if stepped:
+        page.h2("Up and down sweeps")
+        if result.jumps:
+            for j in result.jumps:
+                page.p(jump_text(j), "note" if any(j[w] and j[w]["hysteresis_hz"]
+                                                   for w in ("measured", "model")) else "ok")
+            page.figure(jump_plot(comparisons, result.jumps),
+                        "Up (solid) and down (dashed) sweeps at each level measured both "
+                        "ways; shaded: where they differ by more than "
+                        f"{result.jumps[0]['threshold_db']:g} dB.")
+        else:
+            page.p("No level was measured both up and down: no jump can be seen.")
+    if result.amplitude:
+        unit = comparisons[0].unit if comparisons else "N"
+        amplitude_section(page, result.amplitude, unit)
+    page.h2("Per record")
+    for c in comparisons:
+        page.h3(f"{c.level_text} ({c.file}): FRF error {c.error_db:.2f} dB")
+        for n in c.notes:
+            page.note(n)
+        if c.settled_db:
+            worst = max(c.settled_db.values())
+            page.p(f"Stepped lines settled to {worst:.2f} dB (largest difference between the "
+                   f"first and second half of a step's fitted periods, model and measured).",
+                   "ok" if worst < 0.1 else "note")
+        if c.resonances:
+            page.table(_resonance_frame(c.resonances), index=False)
+        else:
+            page.p("No resonance in the band.")
+        if c.harmonics:
+            page.table(_frame(c.harmonics), index=False)
+        elif c.kind == "random":
+            page.p("Harmonics: none for a random record (no sweep to follow).")
+        elif c.stepped and "measured" not in c.settled_db:
+            page.p("Harmonics: none: the record holds FRFs only, no time data.")
+        else:
+            page.p("Harmonics: none below 0.45 fs.")
+    sweeps = [(lv, m, x) for lv, m, x in pairs
+              if getattr(m, "f_inst", None) is not None and steps_of_signals(m) is None]
+    page.h2("Order spectra")
+    if sweeps:
+        page.figure(order_spectra(sweeps, study.output),
+                    "Order spectra, measured and simulated (harmonics of the sweep at integer "
+                    "orders).")
+    else:
+        page.p("None: no record is a sweep (order spectra follow a sweep's frequency).")
+    timed = [(lv, m, x) for lv, m, x in pairs if hasattr(m, "force")]
+    page.h2("Spectrograms")
+    if timed:
+        for (_, meas, model), c in zip(pairs, comparisons, strict=True):
+            if hasattr(meas, "force"):
+                page.figure(spectrograms(meas, model, study.output, c.level_text),
+                            "Spectrograms side by side (Fig. 11 style).")
+    else:
+        page.p("None: FRF-only records hold no time data.")
     return page.write(path)
+
+
+def steps_of_signals(sig):
+    """The steps of a stepped-sine record (None for a sweep or random record)."""
+    from ..signal.stepped import steps_of
+
+    return steps_of(sig.f_inst, sig.fs)
 
 
 def write_designs_report(study, result, path) -> Path:

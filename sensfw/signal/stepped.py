@@ -101,7 +101,8 @@ def steps_of(f_inst: np.ndarray | None, fs: float, max_changes: float = 0.01
 
 
 def _fit(x: np.ndarray, t: np.ndarray, f: float, orders: Sequence[int]) -> np.ndarray:
-    """Complex amplitudes ``a_k - i b_k`` of ``c + sum a_k cos(2 pi k f t) + b_k sin(...)``."""
+    """Complex amplitudes ``a_k - i b_k`` of ``c + sum a_k cos(2 pi k f t) + b_k sin(...)``
+    (``x`` one record, or several as columns: then one row per order)."""
     w = 2 * np.pi * f * t
     cols = [np.ones_like(t)]
     for k in orders:
@@ -125,18 +126,20 @@ def step_amplitudes(x: np.ndarray, fs: float, step: Step, orders: Sequence[int] 
                     fraction: float = FIT_FRACTION) -> tuple[np.ndarray, np.ndarray]:
     """(complex amplitudes at ``orders``, the same on the first and on the last half of the
     fitted periods: shape ``(2, len(orders))``) of ``x`` in ``step`` (module docstring);
-    NaN for orders at or above 0.45 fs."""
+    NaN for orders at or above 0.45 fs. ``x`` may hold several records as columns
+    (``(n, m)``): the results then have a last axis of ``m``."""
+    x = np.asarray(x, float)
     i0, i1, periods = _window(step, fs, len(x), fraction)
     ok = [k for k in orders if k * step.frequency < 0.45 * fs]
+    rows = [list(orders).index(k) for k in ok]
 
     def amps(a, b):
-        out = np.full(len(orders), np.nan + 0j)
-        got = _fit(np.asarray(x[a:b], float), np.arange(a, b) / fs, step.frequency, ok)
-        out[[list(orders).index(k) for k in ok]] = got
+        out = np.full((len(orders), *x.shape[1:]), np.nan + 0j)
+        out[rows] = _fit(x[a:b], np.arange(a, b) / fs, step.frequency, ok)
         return out
 
     whole = amps(i0, i1)
-    halves = np.full((2, len(orders)), np.nan + 0j)
+    halves = np.full((2, *whole.shape), np.nan + 0j)
     if periods >= 2:
         m = round((periods // 2) * fs / step.frequency)
         halves = np.array([amps(i1 - 2 * m, i1 - m), amps(i1 - m, i1)])
@@ -150,20 +153,24 @@ def stepped_frf(force: np.ndarray, responses: dict[str, np.ndarray], fs: float,
     if not steps:
         raise SignalError("a stepped-sine record needs at least one step")
     k1 = list(orders).index(1)
-    p = [step_amplitudes(force, fs, s, orders, fraction) for s in steps]
-    fp = np.array([w[k1] for w, _ in p])
+    names = list(responses)
+    x = np.column_stack([force, *(responses[n] for n in names)])
+    fits = [step_amplitudes(x, fs, s, orders, fraction) for s in steps]
+    whole = np.array([w for w, _ in fits])  # (steps, orders, 1 + channels)
+    halves = np.array([h[:, k1] for _, h in fits])  # (steps, 2, 1 + channels)
+    fp = whole[:, k1, 0]
     if np.any(np.abs(fp) == 0):
         i = int(np.argmax(np.abs(fp) == 0))
         raise SignalError(f"the excitation is silent in the step at {steps[i].frequency:.6g} "
                           f"Hz")
     out = SteppedFRF(f=np.array([s.frequency for s in steps]), force=fp, frf={})
-    for name, x in responses.items():
-        r = [step_amplitudes(x, fs, s, orders, fraction) for s in steps]
-        out.amplitudes[name] = np.array([w for w, _ in r])
-        out.frf[name] = out.amplitudes[name][:, k1] / fp
-        with np.errstate(invalid="ignore", divide="ignore"):  # NaN: one period or less
-            halves = np.array([h[:, k1] for _, h in r]) / np.array([h[:, k1] for _, h in p])
-            out.settled_db[name] = 20 * np.log10(np.abs(halves[:, 1]) / np.abs(halves[:, 0]))
+    with np.errstate(invalid="ignore", divide="ignore"):  # NaN: one period or less
+        line = halves[:, :, 1:] / halves[:, :, :1]
+        settled = 20 * np.log10(np.abs(line[:, 1]) / np.abs(line[:, 0]))
+    for j, name in enumerate(names):
+        out.amplitudes[name] = whole[:, :, j + 1]
+        out.frf[name] = whole[:, k1, j + 1] / fp
+        out.settled_db[name] = settled[:, j]
     return out
 
 
