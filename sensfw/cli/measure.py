@@ -160,8 +160,10 @@ def compare(
         res = "".join(f"; resonance {r['measured_hz']:.2f} Hz measured, "
                       f"{r['model_hz']:.2f} Hz model" for r in c.resonances
                       if r["measured_hz"] and r["model_hz"])
+        noise = "" if c.error_noise_db is None else \
+            f" (the measurement's noise alone: {c.error_noise_db:.2f} dB)"
         out.print(f"{c.level_text}: FRF error {c.error_db:.2f} dB over {lo:g}-{hi:g} Hz"
-                  f"{res}{thd}")
+                  f"{noise}{res}{thd}")
     for j in result.jumps:
         out.print("  " + jump_text(j))
     if result.amplitude:

@@ -149,3 +149,27 @@ def band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) -> float:
     sel = (f >= band[0]) & (f <= band[1]) & (f > 0)
     weight = np.where((f[sel] == fs / 2), 1.0, 2.0)  # the Nyquist line is not mirrored
     return float(np.sqrt(np.sum(weight * np.abs(X[sel]) ** 2)) / len(x))
+
+
+def line_noise_db(sig: Signals, channel: str, band: tuple[float, float], draws: int = 3,
+                  seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(f, per-line dB) of what the record's own output noise does to its smoothed FRF
+    (:func:`frf_db`): white noise of the record's level (:func:`noise_sigma`) is added
+    ``draws`` times and the RMS change of each line taken. A correct (noise-free) model
+    differs from the record by one noise realisation, so this is the line error the
+    measurement's noise alone gives it (the record's own noise is common to both smoothed
+    FRFs and cancels to first order)."""
+    sigma = noise_sigma(sig, channel)
+    x = sig.channel(channel)
+    base = Signals(t=sig.t, force=sig.force, channels={channel: x}, fs=sig.fs)
+    f, db = frf_db(base, channel, band)
+    rng = np.random.default_rng(seed)
+    acc = np.zeros(len(f))
+    for _ in range(draws):
+        noisy = Signals(t=sig.t, force=sig.force, fs=sig.fs,
+                        channels={channel: x + sigma * rng.standard_normal(len(x))})
+        f2, db2 = frf_db(noisy, channel, band)
+        if len(f2) != len(f):  # a line whose magnitude vanished: compare on the common ones
+            db2 = np.interp(f, f2, db2)
+        acc += (db2 - db) ** 2
+    return f, np.sqrt(acc / draws)

@@ -25,6 +25,7 @@ from .bands import (
     band_noise,
     band_rms,
     frf_db,
+    line_noise_db,
     noise_sigma,
     octave_bands,
     third_octave_bands,
@@ -83,8 +84,9 @@ def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges)
         if len(_MEASURED) > 64:
             _MEASURED.clear()
         hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True),
-                                harmonic_floor(sig, channel))
-    return hit[1], hit[2]
+                                harmonic_floor(sig, channel),
+                                line_noise_db(sig, channel, band))
+    return hit[1], hit[2], hit[3]
 
 
 def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
@@ -105,7 +107,7 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
     if isinstance(measured, FRFRecord) or steps_of(measured.f_inst, measured.fs) is not None:
         return compare_lines(measured, model, channel, band, level, file, detail, error_band)
     edges = analysis_bands(*band)
-    mx, floor = _measured_side(measured, channel, band, edges)
+    mx, floor, (fn, line_noise) = _measured_side(measured, channel, band, edges)
     mm = _side(model, channel, band, edges, detail)
     f, dbm, dbx = mm.f, mm.db, mx.db
     if len(f) != len(mx.f) or not np.allclose(f, mx.f):
@@ -141,7 +143,8 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
                            peaks_model=pm, peaks_measured=px,
                            kind="random" if measured.f_inst is None else "sweep",
                            level_rms=band_rms(measured.sweep().force, measured.fs, band),
-                           band=tuple(band), error_band=error_band)
+                           band=tuple(band), error_band=error_band,
+                           line_noise=np.interp(f, fn, line_noise))
 
 
 def compare_measurements(study, measurements, runner, variant=None,

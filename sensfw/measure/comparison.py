@@ -11,9 +11,11 @@ import numpy as np
 
 #: the FRF error of a record, as every report and ``compare.json`` define it
 ERROR_DEFINITION = (
-    "FRF error: the RMS over the frequency lines of the error band of the dB difference "
-    "20 log10 |H_model / H_measured|, on the Hv FRFs smoothed to 1/24 octave for swept and "
-    "random records and on the steady-state lines for stepped-sine and FRF-only records")
+    "FRF error: the RMS of the dB difference 20 log10 |H_model / H_measured| over the "
+    "frequency lines of the error band that the measurement can speak for (its bands within "
+    "35 dB of the strongest, their own noise below 1.5 dB and their scatter below 3 dB), on "
+    "the Hv FRFs smoothed to 1/24 octave for swept and random records and on the "
+    "steady-state lines for stepped-sine and FRF-only records")
 
 
 def display_unit(u: str) -> str:
@@ -72,6 +74,9 @@ class LevelComparison:
     #: largest |difference| (dB) between the two halves of a stepped line's fitted periods
     #: (model, measured): a step that had not settled (stepped-sine records only)
     settled_db: dict = field(default_factory=dict)
+    #: per line of ``f``: the dB error the measurement's own noise gives a correct model
+    #: (:func:`sensfw.measure.bands.line_noise_db`), where known
+    line_noise: np.ndarray | None = None
 
     dynamic_range: float = 35.0
 
@@ -117,11 +122,27 @@ class LevelComparison:
         return float(np.sqrt(np.mean([b["mean_db"] ** 2 for b in self.used_bands])))
 
     @property
-    def error_db(self) -> float:
-        """The record's FRF error (:data:`ERROR_DEFINITION`) over ``error_band``, or over
-        every compared line without one."""
+    def error_lines(self) -> np.ndarray:
+        """Which lines :attr:`error_db` takes: those of ``error_band`` (every compared line
+        without one) inside a band the measurement can speak for (:attr:`used_bands`)."""
         band = self.error_band or (float(self.f[0]), float(self.f[-1]))
-        return self.frf_rms_db_between(*band)
+        sel = (self.f >= band[0]) & (self.f <= band[1])
+        if self.bands:
+            inside = np.zeros(len(self.f), bool)
+            for b in self.used_bands:
+                inside |= (self.f >= b["lower_hz"]) & (self.f < b["upper_hz"])
+            sel &= inside
+        return sel
+
+    @property
+    def error_db(self) -> float:
+        """The record's FRF error (:data:`ERROR_DEFINITION`): NaN where no line of the error
+        band is one the measurement can speak for."""
+        sel = self.error_lines
+        if not sel.any():
+            return float("nan")
+        d = self.db_model[sel] - self.db_measured[sel]
+        return float(np.sqrt(np.mean(d * d)))
 
     @property
     def level_text(self) -> str:
@@ -132,13 +153,22 @@ class LevelComparison:
         if self.kind == "random" and self.level_rms is not None:
             band = f" in {self.band[0]:g}-{self.band[1]:g} Hz" if self.band else ""
             return f"random, RMS {amount(self.level_rms, self.unit)}{band}"
-        return f"{name} {amount(self.level, self.unit)}" + \
+        return f"{name} {self.level:.3g} {self.unit}" + \
             (f", {self.direction}" if self.direction else "")
 
     @property
     def stepped(self) -> bool:
         """Compared on stepped-sine lines (a stepped-sine or FRF-only record)."""
         return self.kind in ("stepped_sine", "frf")
+
+    @property
+    def error_noise_db(self) -> float | None:
+        """What the measurement's noise alone gives :attr:`error_db` for a correct model
+        (the RMS of :attr:`line_noise` over the same lines), where known."""
+        sel = self.error_lines
+        if self.line_noise is None or not sel.any():
+            return None
+        return float(np.sqrt(np.mean(self.line_noise[sel] ** 2)))
 
     def frf_rms_db_between(self, fmin: float, fmax: float) -> float:
         """RMS over the lines in ``[fmin, fmax]`` of the dB difference model - measurement
@@ -161,6 +191,8 @@ class LevelComparison:
                                "rms_in_band": self.level_rms},
                 "frf_error_db": {"value": self.error_db, "band_hz": list(band),
                                  "definition": ERROR_DEFINITION,
+                                 "lines": int(self.error_lines.sum()),
+                                 "noise_alone": self.error_noise_db,
                                  "rms_in_band": self.error_db,
                                  "bands": bands,
                                  "bands_rms": self.frf_rms_db if self.bands else None,

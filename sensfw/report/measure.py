@@ -59,22 +59,27 @@ def band_errors(comparisons):
     width = 0.8 / max(len(comparisons), 1)
     ref = max(comparisons, key=lambda c: len(c.bands)) if comparisons else None
     centres = [b["centre_hz"] for b in ref.bands] if ref else []
+    colors = plt.cm.tab10(np.arange(10))
     for i, c in enumerate(comparisons):
         pos = {b["centre_hz"]: j for j, b in enumerate(ref.bands)}
+        used = {b["centre_hz"] for b in c.used_bands}
         x = np.array([pos.get(b["centre_hz"], np.nan) for b in c.bands]) + i * width
         err = [b["noise_db"] or 0.0 for b in c.bands]
         ax.bar(x, [b["mean_db"] for b in c.bands], width,
                yerr=err if any(err) else None, error_kw={"lw": 0.8, "capsize": 1.5},
+               color=[colors[i % 10] if b["centre_hz"] in used else "0.8" for b in c.bands],
                label=getattr(c, "level_text", f"{c.level:.3g} {c.unit}"))
     if ref:
         step = max(1, len(centres) // 30)
         ax.set_xticks(np.arange(len(centres))[::step],
-                      [f"{x:.3g}" for x in centres][::step], rotation=60, fontsize=7)
+                      [f"{x:.0f}" if x >= 100 else f"{x:.3g}" for x in centres][::step],
+                      rotation=60, fontsize=7)
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xlabel("band centre (Hz)")
     ax.set_ylabel("model - measured (dB)")
     ax.set_title("Where the model fails: mean FRF difference per band (error bars: the "
-                 "measurement's standard error)", fontsize=10)
+                 "measurement's standard error; grey: bands the measurement cannot speak "
+                 "for)", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(True, axis="y", alpha=0.3)
     return fig
@@ -316,6 +321,7 @@ def _summary(comparisons) -> pd.DataFrame:
         rows.append({
             "record": c.level_text, "file": Path(c.file).name if c.file else "",
             "FRF error (dB)": f"{c.error_db:.2f}",
+            "noise alone (dB)": "" if c.error_noise_db is None else f"{c.error_noise_db:.2f}",
             "resonance measured (Hz)": f"{r['measured_hz']:.2f}" if r else "",
             "model (Hz)": f"{r['model_hz']:.2f}" if r else "",
             "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
@@ -337,7 +343,10 @@ def write_compare_report(study, result, path) -> Path:
                 f"output channel {study.output}; {len(comparisons)} record(s)"
                 + (f"; error band {band[0]:g}-{band[1]:g} Hz" if band else ""))
     page.table(_summary(comparisons), index=False)
-    page.p(ERROR_DEFINITION + (f" (here {band[0]:g}-{band[1]:g} Hz)." if band else "."))
+    page.p(ERROR_DEFINITION + (f" (here {band[0]:g}-{band[1]:g} Hz)" if band else "")
+           + ". 'Noise alone': what the measurement's own noise gives a correct model over the "
+           "same lines (its noise added to it again, three draws); an error near it is within "
+           "the noise.")
     if result.notes:
         page.h2("Records and how the model was driven")
         for n in result.notes:

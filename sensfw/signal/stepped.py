@@ -41,6 +41,10 @@ FIT_FRACTION = 0.5
 ORDERS = (1, 2, 3)
 #: a detected step shorter than this fraction of a neighbour is no step of its own
 SHORTEST = 0.5
+#: neighbouring steps closer than this (relative) are one: the analytic signal's phase
+#: bends within a step where the steps are finer than its leakage (1 / step, e.g. 4 s for
+#: 0.25 Hz steps) and may split one step into two of nearly the same frequency
+RESOLUTION = 1e-3
 
 
 @dataclass(frozen=True)
@@ -174,13 +178,16 @@ def stepped_frf(force: np.ndarray, responses: dict[str, np.ndarray], fs: float,
     return out
 
 
-def _segments(x: np.ndarray, penalty: float, min_size: int = 2) -> list[tuple[int, int]]:
-    """Optimal partition of ``x`` into pieces of constant mean: least squares plus
-    ``penalty`` per piece, pieces of ``min_size`` or more (optimal partitioning, Jackson et
-    al. 2005, with the pruning of PELT, Killick et al. 2012)."""
+def _segments(x: np.ndarray, w: np.ndarray, penalty: float, min_size: int = 2
+              ) -> list[tuple[int, int]]:
+    """Optimal partition of ``x`` (weights ``w``: inverse variances) into pieces of
+    constant mean: weighted least squares plus ``penalty`` per piece, pieces of
+    ``min_size`` or more (optimal partitioning, Jackson et al. 2005, with the pruning of
+    PELT, Killick et al. 2012)."""
     m = len(x)
-    s1 = np.concatenate([[0.0], np.cumsum(x)])
-    s2 = np.concatenate([[0.0], np.cumsum(x * x)])
+    s0 = np.concatenate([[0.0], np.cumsum(w)])
+    s1 = np.concatenate([[0.0], np.cumsum(w * x)])
+    s2 = np.concatenate([[0.0], np.cumsum(w * x * x)])
     best = np.full(m + 1, np.inf)
     best[0] = -penalty
     last = np.zeros(m + 1, dtype=int)
@@ -190,7 +197,7 @@ def _segments(x: np.ndarray, penalty: float, min_size: int = 2) -> list[tuple[in
         if len(s) == 0:
             cand = np.append(cand, t - min_size + 1)
             continue
-        cost = s2[t] - s2[s] - (s1[t] - s1[s]) ** 2 / (t - s)
+        cost = s2[t] - s2[s] - (s1[t] - s1[s]) ** 2 / (s0[t] - s0[s])
         total = best[s] + cost + penalty
         k = int(np.argmin(total))
         best[t], last[t] = total[k], s[k]
@@ -214,18 +221,19 @@ def _runs(phase: np.ndarray, loud: np.ndarray, n: int, fs: float) -> list[tuple[
     slope = wc @ tc / (tc @ tc)
     freq = slope / (2 * np.pi)
     keep &= freq > 0
-    # the windows' scatter from the phase's residual about each window's line (white phase
-    # noise: var(slope) = var(residual) / sum(tc^2)); the median ignores windows across a
-    # step, whose phase bends
+    # each window's scatter from the phase's residual about its line (white phase noise:
+    # var(slope) = var(residual) / sum(tc^2)), relative to its frequency: larger at low
+    # frequencies, and for a window across a step, whose phase bends (it weighs little)
     resid = np.mean((wc - np.outer(slope, tc)) ** 2, axis=1) * n / max(n - 2, 1)
+    rel = np.sqrt(resid / (tc @ tc)) / np.where(slope > 0, slope, np.inf)
     out = []
     for part in np.split(np.arange(m), np.flatnonzero(np.diff(keep.astype(int))) + 1):
         if not keep[part[0]] or len(part) < 2:
             continue
         logf = np.log(freq[part])
-        sigma = np.sqrt(np.median(resid[part]) / (tc @ tc)) / np.median(slope[part])
-        sigma = max(float(sigma), 1e-9)
-        for a, b in _segments(logf, 8.0 * sigma**2 * np.log(max(len(part), 2))):
+        floor = max(float(np.median(rel[part])) * 0.1, 1e-9)
+        weight = 1.0 / np.maximum(rel[part], floor) ** 2
+        for a, b in _segments(logf, weight, 8.0 * np.log(max(len(part), 2))):
             out.append([int(part[a]) * n, int(part[b - 1] + 1) * n,
                         float(np.median(logf[a:b]))])
     # a piece far shorter than its neighbours is the analytic signal's transient where the
@@ -247,16 +255,58 @@ def _runs(phase: np.ndarray, loud: np.ndarray, n: int, fs: float) -> list[tuple[
     return [(a, b) for a, b, _ in out]
 
 
+def _line(phase: np.ndarray, t: np.ndarray, a: int, b: int, n: int
+          ) -> tuple[np.ndarray, float]:
+    """((slope, intercept), standard error of the slope) of the phase line through the
+    inner samples of ``[a, b)`` (a window in from either end, where there are three). The
+    standard error allows for the residual's correlation: ``var(slope) = s^2 L /
+    sum(tc^2)`` with ``L = 1 + 2 sum rho_k`` over the lags where the residual's
+    autocorrelation stays positive."""
+    inner = slice(a + n, b - n) if b - a > 3 * n else slice(a, b)
+    tt, ph = t[inner], phase[inner]
+    fit = np.polyfit(tt, ph, 1)
+    r = ph - np.polyval(fit, tt)
+    var = float(np.mean(r * r))
+    if var == 0 or len(r) < 4:
+        return fit, 0.0
+    acf = np.correlate(r, r, mode="full")[len(r) - 1:len(r) - 1 + min(len(r), 4 * n)] / (
+        var * len(r))
+    stop = int(np.argmax(acf <= 0)) if np.any(acf <= 0) else len(acf)
+    corr = max(1.0, 1.0 + 2.0 * float(np.sum(acf[1:stop])))
+    tc = tt - tt.mean()
+    return fit, float(np.sqrt(var * corr / (tc @ tc)))
+
+
 def _lines(runs: list[tuple[int, int]], phase: np.ndarray, t: np.ndarray, n: int
            ) -> tuple[np.ndarray, np.ndarray]:
-    """(boundaries, (slope, intercept) per step) of the phase lines through ``runs``: a line
-    through each run's inner samples (a window in from either end, where the run has
-    three), boundaries where consecutive lines meet."""
-    fits = []
-    for a, b in runs:
-        inner = slice(a + n, b - n) if b - a > 3 * n else slice(a, b)
-        fits.append(np.polyfit(t[inner], phase[inner], 1))
-    fits = np.array(fits)
+    """(boundaries, (slope, intercept) per step) of the phase lines through ``runs``
+    (:func:`_line`); neighbours whose slopes agree within four standard errors are one
+    step; boundaries where consecutive lines meet."""
+    runs = list(runs)
+    fits = [_line(phase, t, a, b, n) for a, b in runs]
+
+    def join(i):
+        runs[i:i + 2] = [(runs[i][0], runs[i + 1][1])]
+        fits[i:i + 2] = [_line(phase, t, *runs[i], n)]
+
+    i = 0
+    while i + 1 < len(runs):
+        (f0, e0), (f1, e1) = fits[i], fits[i + 1]
+        if abs(f0[0] - f1[0]) <= max(4 * np.hypot(e0, e1), RESOLUTION * abs(f0[0])):
+            join(i)
+        else:
+            i += 1
+    while len(runs) > 1:  # a piece far shorter than a neighbour joins the nearer in slope
+        size = [b - a for a, b in runs]
+        short = [i for i in range(len(runs)) if size[i] < SHORTEST * max(
+            size[j] for j in (i - 1, i + 1) if 0 <= j < len(runs))]
+        if not short:
+            break
+        i = min(short, key=lambda i: size[i])
+        j = min((j for j in (i - 1, i + 1) if 0 <= j < len(runs)),
+                key=lambda j: abs(fits[j][0][0] - fits[i][0][0]))
+        join(min(i, j))
+    fits = np.array([f for f, _ in fits])
     bounds = [t[runs[0][0]]]
     for (_, b0), (a1, _), (s0, c0), (s1, c1) in zip(runs[:-1], runs[1:], fits[:-1], fits[1:],
                                                       strict=True):
@@ -285,8 +335,8 @@ def detect_steps(x: np.ndarray, fs: float, band: tuple[float, float] | None = No
     signal (band-passed to ``[band[0] / 2, 2 band[1]]`` when ``band`` is given) gives the
     unwrapped phase; the frequency of each window is the slope of a line through it, and
     the windows' frequencies are split into pieces of constant frequency by optimal
-    partitioning (:func:`_segments`, penalty ``8 sigma^2 ln m`` for ``m`` windows of scatter
-    ``sigma``, from the phase's residual about each window's line). Short windows
+    partitioning (:func:`_segments`, weighted by each window's scatter from the phase's
+    residual about its line, penalty ``8 ln m`` for ``m`` windows). Short windows
     see short steps, long ones resolve small frequency steps under noise (a line's slope
     error falls as ``n^-1.5``): windows of ``periods`` periods of the record's lowest
     frequency (whole periods average out the phase's ripple at twice the drive frequency)
@@ -294,10 +344,11 @@ def detect_steps(x: np.ndarray, fs: float, band: tuple[float, float] | None = No
     whose piecewise-linear phase has the lowest Bayesian information criterion over the
     record wins (a missed step leaves a bent phase, a spurious one costs its parameters).
     A piece shorter than :data:`SHORTEST` of a neighbour (the analytic signal's
-    transient where the frequency jumps) joins its neighbour nearer in frequency. A step's
-    frequency is the slope of a line through its inner samples' phase; a step ends where
-    its line and the next one's meet; the first starts with its first window,
-    the last ends with its last.
+    transient where the frequency jumps) joins its neighbour nearer in frequency, and
+    neighbours whose phase lines have the same slope within four standard errors or
+    :data:`RESOLUTION` are one step. A step's frequency is the slope of a line through its
+    inner samples' phase; a step ends where its line and the next one's meet; the first
+    starts with its first window, the last ends with its last.
     """
     y = np.asarray(x, float) - np.median(x)
     if band is not None:  # (not down to ~0 Hz: a high-pass that slow rings at every step)
