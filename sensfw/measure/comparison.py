@@ -67,6 +67,8 @@ class LevelComparison:
     peaks_model: list[dict] = field(default_factory=list)
     peaks_measured: list[dict] = field(default_factory=list)
     kind: str = ""
+    #: how an FRF record says it was measured (``sweep``, ``random``; FRF records only)
+    measured_by: str | None = None
     direction: str | None = None
     level_rms: float | None = None
     band: tuple[float, float] | None = None  # compared (the study's band)
@@ -150,6 +152,8 @@ class LevelComparison:
         sines, FRF records, with the direction where known), a random record's RMS in the
         compared band (its ``level`` is then only the rig's setting)."""
         name = KIND_NAMES.get(self.kind, self.kind or "record")
+        if self.kind == "frf" and self.measured_by:
+            name = f"FRF of a {self.measured_by} test,"
         if self.kind == "random" and self.level_rms is not None:
             band = f" in {self.band[0]:g}-{self.band[1]:g} Hz" if self.band else ""
             return f"random, RMS {amount(self.level_rms, self.unit)}{band}"

@@ -240,6 +240,7 @@ def compare_lines(measured: Signals | FRFRecord, model: Signals, channel: str,
         thd_model=thds[0], thd_measured=thds[1], notes=notes,
         unit=unit, output_unit=display_unit(out_unit), peaks_model=pm, peaks_measured=px,
         kind=kind, direction=direction, band=tuple(band), error_band=error_band,
+        measured_by=measured.kind if isinstance(measured, FRFRecord) else None,
         settled_db=settled)
 
 

@@ -310,6 +310,16 @@ def _resonance_frame(rows) -> pd.DataFrame:
     return frame.astype(object).where(frame.notna(), "")
 
 
+def _harmonic_frame(rows) -> pd.DataFrame:
+    """A record's harmonic table, headed plainly."""
+    names = {"order": "order", "model": "model P_k", "measured": "measured P_k",
+             "model_ratio": "model P_k/P_1", "measured_ratio": "measured P_k/P_1",
+             "measured_floor_ratio": "measured noise floor", "difference_db":
+             "model - measured (dB)"}
+    frame = pd.DataFrame(rows)[list(names)].rename(columns=names)
+    return frame.astype(object).where(frame.notna(), "")
+
+
 def _summary(comparisons) -> pd.DataFrame:
     """One row per record: its level as what it is, the error, the resonance."""
     rows = []
@@ -326,7 +336,10 @@ def _summary(comparisons) -> pd.DataFrame:
             "model (Hz)": f"{r['model_hz']:.2f}" if r else "",
             "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
             if c.thd_measured is not None and c.thd_model is not None else ""})
-    return pd.DataFrame(rows)
+    frame = pd.DataFrame(rows)
+    if not (frame["noise alone (dB)"] != "").any():
+        frame = frame.drop(columns="noise alone (dB)")
+    return frame
 
 
 def write_compare_report(study, result, path) -> Path:
@@ -388,7 +401,7 @@ def write_compare_report(study, result, path) -> Path:
         else:
             page.p("No resonance in the band.")
         if c.harmonics:
-            page.table(_frame(c.harmonics), index=False)
+            page.table(_harmonic_frame(c.harmonics), index=False)
         elif c.kind == "random":
             page.p("Harmonics: none for a random record (no sweep to follow).")
         elif c.stepped and "measured" not in c.settled_db:
@@ -403,7 +416,8 @@ def write_compare_report(study, result, path) -> Path:
                     "Order spectra, measured and simulated (harmonics of the sweep at integer "
                     "orders).")
     else:
-        page.p("None: no record is a sweep (order spectra follow a sweep's frequency).")
+        page.p("None: no record holds the time data of a sweep (order spectra follow a "
+               "sweep's frequency).")
     timed = [(lv, m, x) for lv, m, x in pairs if hasattr(m, "force")]
     page.h2("Spectrograms")
     if timed:
