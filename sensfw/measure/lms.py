@@ -156,13 +156,7 @@ def read_lms(path: str | Path | Sequence[str | Path], *, excitation: str | None 
         seen[f.name] = f
     exc = _excitation(where, times, spectral, excitation)
     resp = [f for f in times if f is not exc]
-    if channels is not None:
-        avail = [f.name for f in resp]
-        for ch in channels:
-            if ch not in avail:
-                raise MeasurementError(where, f"missing channel; the files hold "
-                                              f"{', '.join(avail)} (excitation {exc.name})", ch)
-        resp = [f for f in resp if f.name in channels]
+    resp = _keep(where, resp, channels, f"the files hold {{}} (excitation {exc.name})")
     _check_consistent(exc, resp)
     fs = 1.0 / exc.dx
     n = len(exc.values)
@@ -235,13 +229,7 @@ def _frf_only(where: str, paths: list[Path], frfs: list[LMSFunction],
             raise MeasurementError(f.file, f"frequency lines ({len(f.values)} from {f.x0:g} "
                                            f"Hz by {f.dx:g} Hz) differ from "
                                            f"{first.name!r}'s", f.name)
-    if channels is not None:
-        avail = [f.name for f in frfs]
-        for ch in channels:
-            if ch not in avail:
-                raise MeasurementError(where, f"missing channel; the FRFs are of "
-                                              f"{', '.join(avail)}", ch)
-        frfs = [f for f in frfs if f.name in channels]
+    frfs = _keep(where, frfs, channels, "the FRFs are of {}")
     units, file_units = {}, {}
     for f in frfs:
         out, inp = split_ratio(f.unit)
@@ -278,6 +266,20 @@ def _frf_only(where: str, paths: list[Path], frfs: list[LMSFunction],
                                              direction and f"driven {direction}") if x))
     return Measurement(file=where, signals=record, units=file_units,
                        level=None if lv is None else float(lv), notes=notes)
+
+
+def _keep(where: str, funcs: list[LMSFunction], channels: Sequence[str] | None,
+          listing: str) -> list[LMSFunction]:
+    """The functions of ``channels`` (all without), or an error naming a missing one and
+    listing (``listing.format(names)``) what is there."""
+    if channels is None:
+        return funcs
+    avail = [f.name for f in funcs]
+    for ch in channels:
+        if ch not in avail:
+            raise MeasurementError(where, "missing channel; " + listing.format(
+                ", ".join(avail)), ch)
+    return [f for f in funcs if f.name in channels]
 
 
 def _meta(f: LMSFunction) -> dict:
