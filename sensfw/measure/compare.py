@@ -39,7 +39,7 @@ from .distortion import (
     harmonics,
     thd,
 )
-from .lines import compare_lines, jump
+from .lines import LONGER, compare_lines, jump, longer_drive
 from .measurement import FRFRecord
 from .resonance import MIN_FIT_R2, fit_resonances, match_resonances, resonances
 from .signatures import amplitude_dependence
@@ -154,27 +154,34 @@ def compare_measurements(study, measurements, runner, variant=None,
     per record on the study's output over the study's band, the error over ``error_band``
     (default: the study's band); the jump between up and down sweeps at each level that
     has both; the amplitude dependence over the levels (one record per level: the up
-    sweep where there are two)."""
+    sweep where there are two). An FRF-only record whose model lines have not settled
+    (:data:`~sensfw.measure.lines.SETTLED_DB`) is stepped again with twice the dwell, up to
+    :data:`~sensfw.measure.lines.LONGER` times (the runs already made come from the run
+    store)."""
     from ..errors import SensfwError
     from .session import Variant, simulate
 
     variant = variant or Variant()
-    sims = simulate(study, runner, [variant], measurements)
     ex = study.excitation
     band = (ex.f0, ex.f1)
-    levels, pairs, notes = [], [], []
-    for i, m in enumerate(measurements):
-        notes += [f"{m.file}: {n}" for n in m.notes]
-        sig = sims[(variant, i)]
-        if sig is None:
-            raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
-                              f"{m.input_unit}); its error is in the run store")
-        c = compare_level(m.signals, sig, study.output, band, m.level, m.file,
-                          error_band=error_band or band)
-        if m.sweep is not None and c.kind == "sweep":
-            c.kind = m.sweep.kind
-        levels.append(c)
-        pairs.append((m.level, m.signals, sig))
+    for attempt in range(LONGER + 1):
+        sims = simulate(study, runner, [variant], measurements)
+        levels, pairs = [], []
+        for i, m in enumerate(measurements):
+            sig = sims[(variant, i)]
+            if sig is None:
+                raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
+                                  f"{m.input_unit}); its error is in the run store")
+            c = compare_level(m.signals, sig, study.output, band, m.level, m.file,
+                              error_band=error_band or band)
+            if m.sweep is not None and c.kind == "sweep":
+                c.kind = m.sweep.kind
+            levels.append(c)
+            pairs.append((m.level, m.signals, sig))
+        if not any([longer_drive(m, c) for m, c in zip(measurements, levels, strict=True)
+                    if attempt < LONGER]):
+            break
+    notes = [f"{m.file}: {n}" for m in measurements for n in m.notes]
     jumps = []
     for lv in sorted({c.level for c in levels}):
         by = {c.direction: c for c in levels if c.level == lv and c.stepped}

@@ -39,6 +39,10 @@ SETTLE_DECAYS = 4.0
 MIN_PERIODS = 10
 #: up and down sweeps that differ by more than this somewhere (dB) have jumped
 JUMP_DB = 1.0
+#: a model's stepped lines whose two fitted halves differ by more than this (dB) have not
+#: settled: their record is stepped again with twice the dwell, at most LONGER times
+SETTLED_DB = 0.1
+LONGER = 2
 
 
 def drive_lines(record: FRFRecord, band: tuple[float, float], max_steps: int = MAX_STEPS
@@ -110,6 +114,21 @@ def frf_drive(meas: Measurement, study) -> SteppedSine:
            if tau else ")") + f", at {level:g} {rec.units.get('force', 'N')}, {direction}")
     return SteppedSine.at(lines, dwell, ex.fs, float(level), direction=direction,
                           signal_unit=rec.units.get("force", "N"))
+
+
+def longer_drive(meas: Measurement, c: LevelComparison) -> bool:
+    """Double the dwell of an FRF-only record's drive when the model's lines of ``c`` have
+    not settled (:data:`SETTLED_DB`; transients last long near a resonance's jump), with a
+    note; whether it did."""
+    worst = c.settled_db.get("model", 0.0)
+    ex = meas.drive
+    if meas.frf is None or not isinstance(ex, SteppedSine) or not worst > SETTLED_DB:
+        return False
+    meas.drive = SteppedSine.at(ex.lines, 2 * ex.dwell, ex.fs, ex.amplitude,
+                                direction=ex.direction, signal_unit=ex.signal_unit)
+    meas.notes.append(f"the model's lines had not settled ({worst:.2f} dB between the halves "
+                      f"of a step): stepped again with {2 * ex.dwell:.3g} s per step")
+    return True
 
 
 def _db(h: np.ndarray) -> np.ndarray:

@@ -28,8 +28,13 @@ def frf_overlay(comparisons, extra=None, title="FRF: model against measurement",
         for c in cs:
             ax.semilogx(c.f, c.db_model, lw=1.0, ls=":",
                         label=f"{label} {c.level:.3g} {c.unit}")
-    if error_band:
-        ax.axvspan(*error_band, color="0.5", alpha=0.08, lw=0, label="error band")
+    if comparisons:  # the compared lines, not the whole study band of a narrow record
+        lo = min(float(c.f[0]) for c in comparisons)
+        hi = max(float(c.f[-1]) for c in comparisons)
+        ax.set_xlim(lo / 1.02, hi * 1.02)
+        if error_band:
+            ax.axvspan(max(error_band[0], lo), min(error_band[1], hi), color="0.5",
+                       alpha=0.08, lw=0, label="error band")
     ax.set_xlabel("frequency (Hz)")
     if comparisons:
         c = comparisons[0]
@@ -393,8 +398,11 @@ def write_compare_report(study, result, path) -> Path:
             page.note(n)
         if c.settled_db:
             worst = max(c.settled_db.values())
-            page.p(f"Stepped lines settled to {worst:.2f} dB (largest difference between the "
-                   f"first and second half of a step's fitted periods, model and measured).",
+            who = " and ".join(c.settled_db)
+            page.p(f"Stepped lines settled to {worst:.2f} dB ({who}: the largest difference "
+                   f"between the first and the second half of a step's fitted periods)"
+                   + ("." if worst < 0.1 else ": a transient had not decayed at some line, "
+                      "whose value is uncertain by about as much."),
                    "ok" if worst < 0.1 else "note")
         if c.resonances:
             page.table(_resonance_frame(c.resonances), index=False)
