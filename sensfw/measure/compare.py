@@ -11,7 +11,7 @@ nonlinearity).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -154,10 +154,10 @@ def compare_measurements(study, measurements, runner, variant=None,
     per record on the study's output over the study's band, the error over ``error_band``
     (default: the study's band); the jump between up and down sweeps at each level that
     has both; the amplitude dependence over the levels (one record per level: the up
-    sweep where there are two). An FRF-only record whose model lines have not settled
-    (:data:`~sensfw.measure.lines.SETTLED_DB`) is stepped again with twice the dwell, up to
-    :data:`~sensfw.measure.lines.LONGER` times (the runs already made come from the run
-    store)."""
+    sweep where there are two; random records at their RMS in the band). An FRF-only
+    record whose model lines have not settled (:data:`~sensfw.measure.lines.SETTLED_DB`) is
+    stepped again with twice the dwell, up to :data:`~sensfw.measure.lines.LONGER` times
+    (the runs already made come from the run store)."""
     from ..errors import SensfwError
     from .session import Variant, simulate
 
@@ -191,6 +191,9 @@ def compare_measurements(study, measurements, runner, variant=None,
     for c in levels:  # one record per level for the amplitude dependence
         if c.level not in one or c.direction == "up":
             one[c.level] = c
+    one = list(one.values())
+    if all(c.kind == "random" and c.level_rms for c in one):  # their levels as what they are
+        one = [replace(c, level=c.level_rms) for c in one]
     return Comparison(study=study.name, output=study.output, levels=levels, pairs=pairs,
-                      amplitude=amplitude_dependence(list(one.values())), notes=notes,
+                      amplitude=amplitude_dependence(one), notes=notes,
                       error_band=error_band or band, jumps=jumps)

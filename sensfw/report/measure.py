@@ -173,7 +173,7 @@ def _level_ticks(ax, levels) -> None:
     """The measured levels as the ticks of a log axis, written plainly."""
     from matplotlib.ticker import NullFormatter, NullLocator
 
-    ax.set_xticks(levels, [f"{x:g}" for x in levels])
+    ax.set_xticks(levels, [f"{x:.3g}" for x in levels])
     ax.xaxis.set_minor_locator(NullLocator())
     ax.xaxis.set_minor_formatter(NullFormatter())
 
