@@ -146,7 +146,8 @@ def band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) -> float:
     level of a random excitation over the band a comparison looks at."""
     X = np.fft.rfft(np.asarray(x, float))
     f = np.fft.rfftfreq(len(x), 1 / fs)
-    sel = (f >= band[0]) & (f <= band[1]) & (f > 0)
+    tol = 1e-9 * band[1]  # a line on the band's edge counts, whatever the rate's rounding
+    sel = (f >= band[0] - tol) & (f <= band[1] + tol) & (f > 0)
     weight = np.where((f[sel] == fs / 2), 1.0, 2.0)  # the Nyquist line is not mirrored
     return float(np.sqrt(np.sum(weight * np.abs(X[sel]) ** 2)) / len(x))
 
