@@ -19,8 +19,8 @@ from sensfw.study import Study
 def two_dof(kind: str) -> Study:
     return Study.from_dict({
         "study": {"name": "rig"}, "model": {"name": "two_dof", "output": "a1"},
-        "excitation": {"kind": kind, "f0": "50 Hz", "f1": "2 kHz", "duration": "0.5 s",
-                       "fs": "10 kHz", "amplitude": "0.2 N", "tail": "0.05 s"},
+        "excitation": {"kind": kind, "f0": "50 Hz", "f1": "2 kHz", "duration": "0.25 s",
+                       "fs": "5 kHz", "amplitude": "0.2 N", "tail": "0.05 s"},
         "stages": [{"name": "s", "design": "oat", "scorers": [{"name": "rms"}]}]})
 
 
