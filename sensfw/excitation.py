@@ -236,8 +236,11 @@ class LinearSweep(Excitation):
 
 @dataclass(frozen=True)
 class SteppedSine(Excitation):
-    """Stepped sine: ``steps`` frequencies from ``f0`` to ``f1`` (log spaced), each held for
-    ``duration / steps`` s with a continuous phase (no force jumps)."""
+    """Stepped sine: ``steps`` frequencies from ``f0`` to ``f1`` (log spaced), or the given
+    ``lines`` (Hz, e.g. an FRF record's; ``f0``, ``f1`` and ``steps`` then follow from
+    them: :meth:`at`), each held for ``duration / steps`` s with a continuous phase (no
+    force jumps), driven upwards or downwards (``direction``). The response at each step's
+    frequency, in steady state: :func:`sensfw.signal.stepped.stepped_frf`."""
 
     kind: ClassVar[str] = "stepped_sine"
     f0: float = 50.0
@@ -248,14 +251,45 @@ class SteppedSine(Excitation):
     amplitude: float = 1.0
     tail: float = 0.0
     signal_unit: str = "N"
+    lines: tuple[float, ...] = ()
+    direction: str = "up"
 
     def __post_init__(self) -> None:
         _check_sweep(self.f0, self.f1, self.duration, self.fs)
         if self.steps < 1:
             raise SignalError(f"stepped sine needs at least one step, got {self.steps}")
+        if self.direction not in ("up", "down"):
+            raise SignalError(f"stepped sine direction must be 'up' or 'down', got "
+                              f"{self.direction!r}")
+        if self.lines:
+            lines = tuple(sorted(float(x) for x in self.lines))
+            if len(lines) != self.steps or lines[0] != self.f0 or lines[-1] != self.f1:
+                raise SignalError("stepped sine lines: give them with SteppedSine.at() (f0, "
+                                  "f1 and steps follow from the lines)")
+            object.__setattr__(self, "lines", lines)
+
+    @classmethod
+    def at(cls, lines, dwell: float, fs: float, amplitude: float = 1.0,
+           direction: str = "up", tail: float = 0.0, signal_unit: str = "N") -> SteppedSine:
+        """A stepped sine on the frequencies ``lines`` (Hz, any order; driven in
+        ``direction``), ``dwell`` s per step."""
+        f = sorted(float(x) for x in lines)
+        if len(f) < 2 or len(set(f)) != len(f) or f[0] <= 0:
+            raise SignalError("a stepped sine needs two or more distinct positive "
+                              "frequencies")
+        return cls(f0=f[0], f1=f[-1], steps=len(f), duration=dwell * len(f), fs=fs,
+                   amplitude=amplitude, tail=tail, signal_unit=signal_unit, lines=tuple(f),
+                   direction=direction)
+
+    @property
+    def dwell(self) -> float:
+        """Seconds per step."""
+        return self.duration / self.steps
 
     def frequencies(self) -> np.ndarray:
-        return np.geomspace(self.f0, self.f1, self.steps)
+        """The step frequencies in the order they are driven."""
+        f = np.array(self.lines) if self.lines else np.geomspace(self.f0, self.f1, self.steps)
+        return f if self.direction == "up" else f[::-1]
 
     def f_inst(self, t: np.ndarray | None = None) -> np.ndarray:
         t = self.time() if t is None else np.asarray(t, dtype=float)
@@ -264,12 +298,22 @@ class SteppedSine(Excitation):
 
     def force(self, t: np.ndarray | None = None) -> np.ndarray:
         t = self.time() if t is None else np.asarray(t, dtype=float)
-        dwell = self.duration / self.steps
+        dwell = self.dwell
         f = self.frequencies()
         start_phase = np.concatenate([[0.0], np.cumsum(2 * np.pi * f * dwell)])[:-1]
         i = np.clip((t / dwell).astype(int), 0, self.steps - 1)
         phase = start_phase[i] + 2 * np.pi * f[i] * (t - i * dwell)
         return np.where(t < self.duration, self.amplitude * np.sin(phase), 0.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        out = super().to_dict()
+        if not self.lines:  # runs of the log-spaced steps keep their hashes
+            del out["lines"]
+        else:
+            out["lines"] = list(self.lines)
+        if self.direction == "up":
+            del out["direction"]
+        return out
 
 
 @dataclass(frozen=True)
@@ -316,8 +360,10 @@ class SampledForce(Excitation):
 
     ``sweep`` optionally describes the sweep the record follows (``{"kind": "log_chirp" |
     "linear_sweep", "f0", "f1", "t_start", "t_end"}``, e.g. from
-    :func:`sensfw.signal.sweep.estimate_sweep`), which gives the instantaneous frequency for
-    order analysis; without it the record is treated as broadband. ``amplitude`` is the
+    :func:`sensfw.signal.sweep.estimate_sweep`, or ``{"kind": "stepped_sine", "starts",
+    "frequencies", "t_end"}`` from :func:`sensfw.signal.stepped.detect_steps`), which gives
+    the instantaneous frequency for order or per-step analysis; without it the record is
+    treated as broadband. ``amplitude`` is the
     level the record was measured at (it does not rescale the samples; :meth:`scaled` does).
     """
 
@@ -377,6 +423,9 @@ class SampledForce(Excitation):
             return None
         t = self.time() if t is None else np.asarray(t, dtype=float)
         s = self.sweep
+        if s["kind"] == "stepped_sine":  # step i holds frequencies[i] from starts[i] on
+            i = np.searchsorted(np.asarray(s["starts"], float), t, side="right") - 1
+            return np.asarray(s["frequencies"], float)[np.clip(i, 0, len(s["starts"]) - 1)]
         t0, t1 = float(s["t_start"]), float(s["t_end"])
         u = np.clip(t - t0, 0.0, t1 - t0)
         if s["kind"] == "linear_sweep":

@@ -126,15 +126,17 @@ def compare(
     measured: Measured,
     out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
     error_band: Annotated[str | None, typer.Option(
-        help="also the FRF error over LO,HI Hz (RMS of the dB difference line by line)"
+        help="the band LO,HI Hz of each record's FRF error (default: the study's band)"
     )] = None,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
     progress: ShowProgress = True,
 ) -> None:
-    """See where the model fails: FRF error per band, resonances, harmonics, THD, levels."""
+    """See where the model fails: FRF error, resonances, harmonics, THD, up/down jumps,
+    levels. Records: time data (sweeps, random, stepped sines) or FRFs alone."""
     from ..measure.compare import compare_measurements
+    from ..measure.lines import jump_text
     from ..measure.prepared import load_measurements
     from ..report.measure import write_compare_report
     from ..study import Study
@@ -144,28 +146,25 @@ def compare(
     meas = load_measurements(study, [str(m) for m in measured])
     for m in meas:
         for note in m.notes:
-            if "not the study's" in note:
+            if "not the study's" in note or "FRF-only" in note:
                 say(f"notice: {m.file}: {note}", style="yellow")
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
-        result = compare_measurements(study, meas, runner)
-    data = result.to_dict()
-    if band is not None:
-        for c, d in zip(result.levels, data["levels"], strict=True):
-            d["frf_error_db"]["band_hz"] = list(band)
-            d["frf_error_db"]["rms_in_band"] = c.frf_rms_db_between(*band)
-    _json(out_dir / "compare.json", data)
-    write_compare_report(study, result.levels, result.pairs, result.amplitude, result.notes,
-                         out_dir / "report.html")
+        result = compare_measurements(study, meas, runner, error_band=band)
+    _json(out_dir / "compare.json", result.to_dict())
+    write_compare_report(study, result, out_dir / "report.html")
+    lo, hi = result.error_band
     for c in result.levels:
         thd = "" if c.thd_model is None else \
             f"; THD model {c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %"
-        inband = "" if band is None else \
-            f", {c.frf_rms_db_between(*band):.2f} dB over {band[0]:g}-{band[1]:g} Hz"
         res = "".join(f"; resonance {r['measured_hz']:.2f} Hz measured, "
                       f"{r['model_hz']:.2f} Hz model" for r in c.resonances
                       if r["measured_hz"] and r["model_hz"])
-        out.print(f"level {c.level:.3g} {c.unit}: FRF error {c.frf_rms_db:.2f} dB RMS "
-                  f"(noise floor {c.noise_floor_db:.2f} dB){inband}{res}{thd}")
+        noise = "" if c.error_noise_db is None else \
+            f" (the measurement's noise alone: {c.error_noise_db:.2f} dB)"
+        out.print(f"{c.level_text}: FRF error {c.error_db:.2f} dB over {lo:g}-{hi:g} Hz"
+                  f"{noise}{res}{thd}")
+    for j in result.jumps:
+        out.print("  " + jump_text(j))
     if result.amplitude:
         for line in result.amplitude["summary"]:
             out.print("  " + line)

@@ -16,7 +16,12 @@ amplifier voltage instead of a force. :func:`prepare` therefore
 4. aligns: for the ideal drive, resampled to the study's rate, the delay removed and cut to
    the study's record; for the measured drive, the DC offset removed (a force transducer's
    or amplifier's offset is not a static load) and the measured instantaneous frequency
-   attached for order analysis.
+   attached for order analysis (a stepped sine: its steps, for the per-step analysis of
+   :mod:`sensfw.measure.lines`).
+
+An FRF-only measurement (no time data) is driven by a stepped sine on its lines
+(:func:`sensfw.measure.lines.frf_drive`). A random record's level is stated as its RMS in
+the study's band.
 
 Errors raise :class:`~sensfw.errors.MeasurementError` naming the file and channel.
 """
@@ -30,11 +35,15 @@ from fractions import Fraction
 import numpy as np
 from scipy.signal import correlate, resample_poly
 
-from ..errors import MeasurementError
+from ..errors import MeasurementError, SignalError
 from ..excitation import Excitation, SampledForce
 from ..models.base import Signals
+from ..signal.stepped import detect_steps, direction_of
 from ..signal.sweep import SweepEstimate, estimate_sweep
-from .io import Measurement
+from .bands import band_rms
+from .comparison import amount
+from .lines import frf_drive
+from .measurement import Measurement
 
 #: relative tolerance on f0, f1 and duration for "the record is the study's sweep"
 SWEEP_TOLERANCE = 0.03
@@ -99,6 +108,8 @@ def describe(est: SweepEstimate) -> str:
         return (f"{est.kind.replace('_', ' ')} {est.f0:.4g} -> {est.f1:.4g} Hz from "
                 f"{est.t_start:.4g} s to {est.t_end:.4g} s, level {est.amplitude:.4g}, "
                 f"drift +-{est.drift:.0%}, offset {est.offset:.3g}")
+    if est.kind == "random":
+        return "random, broadband"
     return (f"{est.kind.replace('_', ' ')} from {est.t_start:.4g} s to {est.t_end:.4g} s, "
             f"level {est.amplitude:.4g}" + (f" ({'; '.join(est.notes)})" if est.notes else ""))
 
@@ -164,11 +175,23 @@ def align_to_ideal(meas: Measurement, excitation: Excitation, est: SweepEstimate
 
 def measured_drive(meas: Measurement, est: SweepEstimate, level: float) -> SampledForce:
     """The measured record (offset removed) as the model's excitation; attaches the
-    measured instantaneous frequency to the measurement's signals where it is a sweep."""
+    measured instantaneous frequency to the measurement's signals where it is a sweep, and
+    the steps (:func:`sensfw.signal.stepped.detect_steps`) where it is a stepped sine."""
     sig = meas.signals
     record = sig.force - est.offset
     sweep = ({"kind": est.kind, "f0": est.f0, "f1": est.f1, "t_start": est.t_start,
               "t_end": est.t_end} if est.is_sweep else None)
+    if est.kind == "stepped_sine":
+        try:
+            steps = detect_steps(record, sig.fs)
+        except SignalError as err:
+            raise MeasurementError(meas.file, f"a stepped sine whose steps cannot be told "
+                                              f"apart: {err}", "force") from None
+        sweep = {"kind": "stepped_sine", "starts": [s.start for s in steps],
+                 "frequencies": [s.frequency for s in steps], "t_end": steps[-1].end}
+        f = [s.frequency for s in steps]
+        meas.notes.append(f"{len(steps)} steps found, {min(f):.4g}-{max(f):.4g} Hz, "
+                          f"{direction_of(f) or 'neither up nor down'}")
     drive = SampledForce(record, sig.fs, amplitude=level, signal_unit=meas.input_unit,
                          sweep=sweep)
     meas.signals = replace(sig, force=record, f_inst=drive.f_inst(sig.t),
@@ -176,12 +199,36 @@ def measured_drive(meas: Measurement, est: SweepEstimate, level: float) -> Sampl
     return drive
 
 
+def require_gain(meas: Measurement, study) -> None:
+    if meas.input_unit != "N" and "excitation_gain" not in study.parameters:
+        raise MeasurementError(meas.file, f"the excitation is recorded in {meas.input_unit}: "
+                               "the study needs [excitation] gain (N per "
+                               f"{meas.input_unit}) to drive the model with it", "force")
+
+
+def random_level(meas: Measurement, band: tuple[float, float]) -> None:
+    """A random record's level is its RMS in the band: a note says so, in place of the
+    loader's comparison of a nominal level with a sine amplitude it does not have."""
+    rms = band_rms(meas.signals.force - np.mean(meas.signals.force), meas.fs, band)
+    meas.notes[:] = [n for n in meas.notes if "sweep amplitude" not in n]
+    named = meas.signals.meta.get("level_from")
+    meas.notes.append(f"random excitation, RMS {amount(rms, meas.input_unit)} in {band[0]:g}-"
+                      f"{band[1]:g} Hz" + (f" (the {named}'s {meas.level:g} is the rig's "
+                                           f"setting, not an amplitude)"
+                                           if named not in (None, "amplitude") else ""))
+
+
 def prepare(meas: Measurement, study) -> Measurement:
     """Checks, excitation estimate, drive decision and alignment (module docstring): what
-    every measurement command does first."""
+    every measurement command does first. An FRF-only measurement is driven by a stepped
+    sine on its lines (:func:`sensfw.measure.lines.frf_drive`)."""
     require_channels(meas, [study.output])
-    check_clipping(meas)
     ex = study.excitation
+    if meas.frf is not None:
+        require_gain(meas, study)
+        meas.drive = frf_drive(meas, study)
+        return meas
+    check_clipping(meas)
     sig = meas.signals
     est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
     if est.kind == "silent":
@@ -192,14 +239,13 @@ def prepare(meas: Measurement, study) -> Measurement:
         meas.notes.append(f"excitation level estimated from the record: {level:.4g} "
                           f"{meas.input_unit}")
     meas.level = float(level)
+    if est.kind == "random":
+        random_level(meas, (ex.f0, ex.f1))
     mismatch = sweep_mismatch(est, ex)
     if mismatch is None and est.drift > DRIFT_TOLERANCE:
         mismatch = f"its amplitude drifts by +-{est.drift:.0%}"
     voltage = meas.input_unit != "N"
-    if voltage and "excitation_gain" not in study.parameters:
-        raise MeasurementError(meas.file, f"the excitation is recorded in {meas.input_unit}: "
-                               "the study needs [excitation] gain (N per "
-                               f"{meas.input_unit}) to drive the model with it", "force")
+    require_gain(meas, study)
     if study.drive == "measured" or voltage or (mismatch and study.drive == "auto"):
         if mismatch and study.drive == "auto":
             meas.notes.append(f"the excitation is not the study's ({mismatch}): estimated "

@@ -4,118 +4,33 @@
 CSV: a header row with ``time``, the excitation ``force`` and one column per sensor channel;
 units either in the header (``force [N]``, ``crank_axial [m/s^2]``, ``[g]`` meaning standard
 gravity) or in a sidecar ``<file>.toml``/``<file>.json`` with ``[units]`` (column -> unit) and
-optionally ``fs`` and ``level`` (excitation amplitude, N). UFF58: one record per channel
-(pyuff); the record's ``id1`` (or response-entity name) names the channel, ``force`` (or a
-record whose response direction/entity says force) is the excitation. LMS Test.Lab MAT v5
-exports (a ``.mat`` file or a folder of them): :mod:`sensfw.measure.lms`; their excitation may
-be an amplifier voltage (``Measurement.excitation == "voltage"``).
+optionally ``fs`` and ``level`` (excitation amplitude, N). UFF58 (time records and FRF
+records): :mod:`sensfw.measure.uff`. LMS Test.Lab MAT v5 exports (a ``.mat`` file or a
+folder of them): :mod:`sensfw.measure.lms`; their excitation may be an amplifier voltage
+(``Measurement.excitation == "voltage"``). :func:`load` and :func:`load_all` read any of
+them.
 
-Loaded values are converted to SI (N, m/s^2, s). Problems raise
+Loaded values are converted to SI (:mod:`sensfw.measure.columns`). Problems raise
 :class:`~sensfw.errors.MeasurementError` naming the file and the channel.
 """
 
 from __future__ import annotations
 
-import json
 import re
-import tomllib
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from ..errors import MeasurementError
 from ..models.base import Signals
+from .columns import ACCEL_UNIT, assemble, factor, sidecar, target
+from .measurement import FRFRecord, Measurement
+from .uff import read_uff, read_uff_levels, write_uff
 
-TARGET_UNITS = {"time": "s", "force": "N"}
-ACCEL_UNIT = "m/s^2"
+__all__ = ["FRFRecord", "Measurement", "load", "load_all", "read_csv", "read_uff",
+           "read_uff_levels", "write_csv", "write_uff"]
+
 _HEADER = re.compile(r"^\s*([^\[\]]+?)\s*(?:\[([^\]]*)\])?\s*$")
-
-
-@dataclass
-class Measurement:
-    """Signals read from one file (or one folder of files), with where they came from.
-
-    ``signals.force`` holds the excitation; ``signals.units["force"]`` says what it is: N
-    for a force, V for an amplifier voltage (a model is then driven through the gain
-    parameter ``excitation_gain``, N/V); :attr:`excitation` names it. ``level`` is the
-    excitation amplitude in that unit if known; ``units`` the units as the file labels them.
-
-    After :func:`sensfw.measure.checks.prepare`: ``sweep`` is the estimated excitation
-    (:class:`~sensfw.signal.sweep.SweepEstimate`) and ``drive`` the excitation that drives the
-    model for this measurement (the study's ideal sweep at the measured level, or the
-    measured record itself).
-    """
-
-    file: str
-    signals: Signals
-    units: dict[str, str] = field(default_factory=dict)
-    level: float | None = None  # excitation amplitude (N, or V for a voltage) if known
-    notes: list[str] = field(default_factory=list)
-    sweep: Any = None
-    drive: Any = None
-
-    @property
-    def fs(self) -> float:
-        return self.signals.fs
-
-    @property
-    def input_unit(self) -> str:
-        """Unit of the excitation channel: N for a force, V for an amplifier voltage."""
-        return self.signals.units.get("force", "N")
-
-    @property
-    def excitation(self) -> str:
-        """``"voltage"`` when the excitation channel is an amplifier voltage, else
-        ``"force"``."""
-        return "voltage" if self.input_unit == "V" else "force"
-
-
-def _factor(file: str, column: str, unit: str | None, target: str) -> float:
-    """Multiplier from ``unit`` to ``target`` (``g`` is standard gravity)."""
-    if not unit:
-        return 1.0
-    u = unit.strip()
-    if u.lower() in ("g", "gn", "g0", "g_n"):
-        u = "standard_gravity"
-    from ..study import units
-
-    try:
-        return float(units().Quantity(1.0, u).to(target).magnitude)
-    except Exception as err:
-        raise MeasurementError(file, f"unit {unit!r} cannot be converted to {target}: {err}",
-                               column) from None
-
-
-def _sidecar(path: Path) -> dict:
-    for ext, reader in ((".toml", tomllib.loads), (".json", json.loads)):
-        side = path.with_suffix(ext) if path.suffix != ext else None
-        side2 = Path(str(path) + ext)
-        for candidate in (side, side2):
-            if candidate is not None and candidate.exists():
-                try:
-                    return reader(candidate.read_text())
-                except Exception as err:
-                    raise MeasurementError(str(candidate), f"unreadable sidecar: {err}") \
-                        from None
-    return {}
-
-
-def _target(column: str, unit: str | None = None) -> str:
-    """SI unit a column is converted to; the excitation may be a force or a voltage."""
-    if column == "force" and unit and _is_voltage(unit):
-        return "V"
-    return TARGET_UNITS.get(column, ACCEL_UNIT)
-
-
-def _is_voltage(unit: str) -> bool:
-    from ..study import units
-
-    try:
-        return units().Quantity(1.0, unit.strip()).check("[electric_potential]")
-    except Exception:
-        return False
 
 
 def read_csv(path: str | Path) -> Measurement:
@@ -149,143 +64,22 @@ def read_csv(path: str | Path) -> Measurement:
     data = np.atleast_2d(data)
     if data.shape[1] != len(names):
         raise MeasurementError(file, f"{data.shape[1]} data columns but {len(names)} headers")
-    side = _sidecar(path)
+    side = sidecar(path)
     unit_map = {**header_units, **side.get("units", {})}
     columns = {}
     for i, name in enumerate(names):
         unit = unit_map.get(name)
-        columns[name] = data[:, i] * _factor(file, name, unit, _target(name, unit))
-    return _assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
-
-
-def _assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_declared,
-              level) -> Measurement:
-    if "time" not in columns:
-        raise MeasurementError(file, "no 'time' column", "time")
-    if "force" not in columns:
-        raise MeasurementError(file, "no 'force' column (the excitation force)", "force")
-    for name, x in columns.items():
-        bad = ~np.isfinite(x)
-        if bad.any():
-            i = int(np.argmax(bad))
-            raise MeasurementError(file, f"{int(bad.sum())} NaN/inf value(s), first in data "
-                                         f"row {i + 1}", name)
-    t = columns["time"]
-    dt = np.diff(t)
-    if len(dt) == 0 or np.any(dt <= 0):
-        raise MeasurementError(file, "time is not strictly increasing", "time")
-    step = float(np.median(dt))
-    if np.max(np.abs(dt - step)) > 1e-3 * step:
-        worst = int(np.argmax(np.abs(dt - step)))
-        raise MeasurementError(file, f"non-uniform sampling: step {dt[worst]:.6g} s at row "
-                                     f"{worst + 2} vs {step:.6g} s elsewhere", "time")
-    fs = 1.0 / step
-    if fs_declared is not None and abs(fs - float(fs_declared)) > 1e-3 * float(fs_declared):
-        raise MeasurementError(file, f"sample rate from the time column is {fs:.6g} Hz but the "
-                                     f"sidecar declares fs = {fs_declared} Hz", "time")
-    channels = {k: v for k, v in columns.items() if k not in ("time", "force")}
-    sig = Signals(t=t - t[0], force=columns["force"], channels=channels, fs=fs,
-                  units={k: _target(k, unit_map.get(k)) for k in ("force", *channels)})
-    return Measurement(file=file, signals=sig, units=dict(unit_map),
-                       level=None if level is None else float(level))
-
-
-_LEVEL = re.compile(r"level\s*=\s*([-+0-9.eE]+)")
-
-
-def read_uff_levels(path: str | Path) -> list[Measurement]:
-    """Every measurement in a UFF file: one record (UFF58, time series) per channel, and per
-    level where the records say so (``id2 = "level=0.3"``, as :func:`write_uff` writes)."""
-    import pyuff
-
-    path = Path(path)
-    file = str(path)
-    if not path.exists():
-        raise MeasurementError(file, "file not found")
-    try:
-        uff = pyuff.UFF(file)
-        sets = uff.read_sets()
-    except Exception as err:
-        raise MeasurementError(file, f"not a readable UFF file: {err}") from None
-    if isinstance(sets, dict):
-        sets = [sets]
-    records = [s for s in sets if s.get("type") == 58]
-    if not records:
-        raise MeasurementError(file, "no UFF58 (function at nodal DOF) records")
-    groups: dict[float | None, list[dict]] = {}
-    for rec in records:
-        m = _LEVEL.search(str(rec.get("id2") or ""))
-        groups.setdefault(float(m.group(1)) if m else None, []).append(rec)
-    if None in groups and len(groups) > 1:
-        raise MeasurementError(file, "some records carry a level (id2 = 'level=...') and "
-                                     "others do not")
-    side = _sidecar(path)
-    out = []
-    for level, recs in groups.items():
-        where = file if level is None else f"{file} (level {level:g})"
-        columns, unit_map, t = {}, {}, None
-        for rec in recs:
-            name = str(rec.get("id1") or rec.get("rsp_ent_name") or "").strip()
-            if not name:
-                raise MeasurementError(where, "a UFF58 record has no name (id1)")
-            if np.iscomplexobj(rec["data"]):
-                raise MeasurementError(where, "complex (spectral) record; expected a time "
-                                              "series", name)
-            x = np.asarray(rec["x"], float)
-            y = np.asarray(rec["data"], float)
-            unit = str(rec.get("ordinate_axis_units_lab") or "").strip() or None
-            key = "force" if name.lower() in ("force", "excitation", "input") else name
-            if key in columns:
-                raise MeasurementError(where, "two records for the same channel", key)
-            columns[key] = y * _factor(where, key, unit, _target(key, unit))
-            unit_map[key] = unit or _target(key)
-            if t is None:
-                t = x
-            elif len(x) != len(t) or np.max(np.abs(x - t)) > 1e-9 * max(1.0, abs(t[-1])):
-                raise MeasurementError(where, "time axis differs from the first record", key)
-        columns["time"] = t
-        out.append(_assemble(where, columns, unit_map, side.get("fs"),
-                             level if level is not None else side.get("level")))
-    return sorted(out, key=lambda m: (m.level is None, m.level or 0.0))
-
-
-def read_uff(path: str | Path) -> Measurement:
-    """A UFF file holding one measurement (see :func:`read_uff_levels` for several)."""
-    found = read_uff_levels(path)
-    if len(found) > 1:
-        raise MeasurementError(str(path), f"holds {len(found)} levels; load it with "
-                                          "load_all()")
-    return found[0]
-
-
-def write_uff(path: str | Path, measurements: list[tuple[Signals, float | None]]) -> Path:
-    """Write one or several levels as UFF58 time records (one per channel and level, the
-    level in ``id2``)."""
-    import pyuff
-
-    path = Path(path)
-    if path.exists():
-        path.unlink()
-    uff = pyuff.UFF(str(path))
-    for sig, level in measurements:
-        tag = "" if level is None else f"level={level:.10g}"
-        for name, y in [("force", sig.force), *sig.channels.items()]:
-            unit = sig.units.get(name, _target(name))
-            uff.write_sets(pyuff.prepare_58(
-                func_type=1, id1=name, id2=tag, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1,
-                data=np.asarray(y, float), x=sig.t, abscissa_spacing=1, abscissa_min=0.0,
-                abscissa_inc=1 / sig.fs, abscissa_spec_data_type=17,
-                ordinate_spec_data_type=13 if name == "force" else 12,
-                orddenom_spec_data_type=13, ordinate_axis_units_lab=unit, binary=0),
-                mode="add")
-    return path
+        columns[name] = data[:, i] * factor(file, name, unit, target(name, unit))
+    return assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
 
 
 def load(path: str | Path) -> Measurement:
     """A measurement file, by extension: ``.csv``/``.txt``, ``.uff``/``.unv``, or ``.mat``
     (LMS Test.Lab export), or a folder of LMS ``.mat`` exports (one level: e.g.
     ``TimeShaker.mat`` with the excitation and ``Time.mat`` with the responses), read by
-    :func:`sensfw.measure.lms.read_lms`."""
+    :func:`sensfw.measure.lms.read_lms`. A file of FRFs without time data (an LMS
+    ``FRF.mat`` alone, UFF58 FRF records) gives an FRF-only measurement
+    (``Measurement.frf``)."""
     path = Path(path)
     ext = path.suffix.lower()
     if path.is_dir() or ext == ".mat":
@@ -316,18 +110,54 @@ def load_all(path: str | Path) -> list[Measurement]:
 def write_csv(path: str | Path, signals: Signals, level: float | None = None,
               meta: dict | None = None) -> Path:
     """Write signals as a measurement CSV with units in the header (+ a TOML sidecar with the
-    sample rate, level and any ``meta``)."""
+    sample rate, level and any ``meta``, written by tomlkit: any string, nested tables and
+    arrays round-trip through :func:`load`; a ``None`` anywhere in ``meta`` is an error
+    naming its key, since TOML has no null)."""
     path = Path(path)
+    side = path.with_suffix(".toml")
+    text = sidecar_text(str(side), signals.fs, level, meta)  # checked before writing anything
     cols = ["time [s]", f"force [{signals.units.get('force', 'N')}]",
             *[f"{k} [{signals.units.get(k, ACCEL_UNIT)}]" for k in signals.channels]]
     data = np.column_stack([signals.t, signals.force, *signals.channels.values()])
     np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
-    side = {"fs": float(signals.fs)}
-    if level is not None:
-        side["level"] = float(level)
-    lines = [f"fs = {side['fs']!r}"] + ([f"level = {side['level']!r}"] if level is not None
-                                        else [])
-    for k, v in (meta or {}).items():
-        lines.append(f"{k} = {json.dumps(v)}")
-    path.with_suffix(".toml").write_text("\n".join(lines) + "\n")
+    side.write_text(text, encoding="utf-8")
     return path
+
+
+def _null_at(value, where: str) -> str | None:
+    """The key path of the first ``None`` inside ``value`` (dicts and lists), or None."""
+    if value is None:
+        return where
+    items = value.items() if isinstance(value, dict) else \
+        enumerate(value) if isinstance(value, (list, tuple)) else ()
+    for k, v in items:
+        found = _null_at(v, f"{where}[{k!r}]" if isinstance(k, str) else f"{where}[{k}]")
+        if found:
+            return found
+    return None
+
+
+def sidecar_text(file: str, fs: float, level: float | None, meta: dict | None) -> str:
+    """The TOML sidecar of a measurement CSV: ``fs``, ``level`` and the entries of ``meta``
+    (:func:`write_csv`)."""
+    import tomlkit
+    from tomlkit.exceptions import ConvertError
+
+    doc = tomlkit.document()
+    doc["fs"] = float(fs)
+    if level is not None:
+        doc["level"] = float(level)
+    for key, value in (meta or {}).items():
+        where = f"meta[{key!r}]"
+        if key in doc or key == "units":
+            raise MeasurementError(file, f"{where}: the sidecar's own key; rename it")
+        null = _null_at(value, where)
+        if null:
+            raise MeasurementError(file, f"{null} is None, which TOML cannot hold (it has no "
+                                         f"null): leave the key out or give a value")
+        try:
+            doc[key] = value.item() if isinstance(value, np.generic) else value
+        except (ConvertError, TypeError, ValueError) as err:
+            raise MeasurementError(file, f"{where} = {value!r} cannot be written as TOML: "
+                                         f"{err}") from None
+    return tomlkit.dumps(doc)

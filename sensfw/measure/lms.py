@@ -32,11 +32,12 @@ import numpy as np
 
 from ..errors import MeasurementError
 from ..models.base import Signals
-from .io import Measurement
-from .lms_format import LMSFunction, lms_struct, read_functions, si_unit
+from .lms_format import LMSFunction, _int_or_none, lms_struct, read_functions, si_unit
+from .measurement import FRFRecord, Measurement
 
 __all__ = ["BERT_POSITIONS", "LMS_WINDOWS", "LMSFunction", "amplitude", "frf_settings",
-           "level_from_name", "lms_struct", "read_functions", "read_lms", "si_unit"]
+           "level_from_name", "lms_struct", "read_functions", "read_lms", "run_excitation",
+           "si_unit", "split_ratio"]
 
 EXCITATION_UNITS = {"N": "force", "V": "voltage"}
 #: LMS window names -> scipy.signal.get_window names (windows without a parameter)
@@ -138,8 +139,13 @@ def read_lms(path: str | Path | Sequence[str | Path], *, excitation: str | None 
     times = [f for f in funcs if f.x_unit == "s"]
     spectral = [f for f in funcs if f.x_unit != "s"]
     if not times:
+        frfs = [f for f in spectral if f.kind.upper() == "FRF"]
+        if frfs:
+            coherence = [f for f in spectral if f.kind.upper() == "COHERENCE"]
+            return _frf_only(where, paths, frfs, coherence, channels, names, level)
         found = ", ".join(sorted({f"{f.struct} ({f.kind}, x in {f.x_unit})" for f in funcs}))
-        raise MeasurementError(where, f"no time signals (x axis in s); found {found}")
+        raise MeasurementError(where, f"no time signals (x axis in s) and no FRF; found "
+                                      f"{found}")
     _name_channels(times, names)
     seen: dict[str, LMSFunction] = {}
     for f in times:
@@ -150,13 +156,7 @@ def read_lms(path: str | Path | Sequence[str | Path], *, excitation: str | None 
         seen[f.name] = f
     exc = _excitation(where, times, spectral, excitation)
     resp = [f for f in times if f is not exc]
-    if channels is not None:
-        avail = [f.name for f in resp]
-        for ch in channels:
-            if ch not in avail:
-                raise MeasurementError(where, f"missing channel; the files hold "
-                                              f"{', '.join(avail)} (excitation {exc.name})", ch)
-        resp = [f for f in resp if f.name in channels]
+    resp = _keep(where, resp, channels, f"the files hold {{}} (excitation {exc.name})")
     _check_consistent(exc, resp)
     fs = 1.0 / exc.dx
     n = len(exc.values)
@@ -182,6 +182,104 @@ def read_lms(path: str | Path | Sequence[str | Path], *, excitation: str | None 
     return Measurement(file=where, signals=sig,
                        units={"force": exc.file_unit, **{f.name: f.file_unit for f in resp}},
                        level=float(lv), notes=notes)
+
+
+_RATIO = re.compile(r"^\(?(.+?)\)?\s*/\s*([^/()]+)$")
+_SPAN = re.compile(r"(\d+(?:p\d+)?)\s*to\s*(\d+(?:p\d+)?)\s*hz", re.IGNORECASE)
+_RUN_KINDS = (("step", "stepped_sine"), ("chirp", "sweep"), ("sweep", "sweep"),
+              ("rand", "random"), ("noise", "random"))
+
+
+def split_ratio(unit: str) -> tuple[str, str]:
+    """``"(m/s^2)/V"`` -> ``("m/s^2", "V")``: the output and input units of an FRF."""
+    m = _RATIO.match(unit.strip())
+    if not m:
+        return unit, ""
+    return m.group(1).strip(), m.group(2).strip()
+
+
+def run_excitation(run: str) -> tuple[str | None, str | None]:
+    """(kind, direction) of the excitation as a Test.Lab run name states it, or None:
+    ``Round1_Chirp0p05_70to110Hz_1`` -> ``("sweep", "up")``, ``..._Rand0p30_0to110Hz_1``
+    -> ``("random", None)``; words ``step``, ``chirp``/``sweep``, ``rand``/``noise``, a
+    span ``AtoBHz`` (up where B > A)."""
+    low = run.lower()
+    kind = next((k for word, k in _RUN_KINDS if word in low), None)
+    direction = None
+    m = _SPAN.search(run)
+    if m and kind != "random":
+        a, b = (float(x.replace("p", ".")) for x in m.groups())
+        direction = "up" if b > a else "down" if b < a else None
+    return kind, direction
+
+
+def _frf_only(where: str, paths: list[Path], frfs: list[LMSFunction],
+              coherence: list[LMSFunction], channels: Sequence[str] | None,
+              names: Mapping[str, str] | None, level: float | None) -> Measurement:
+    """An FRF-only measurement from LMS FRF structs (and their coherences, where read)."""
+    _name_channels(frfs, names)
+    _name_channels(coherence, names)
+    first = frfs[0]
+    refs = {str(f.record.get("reference") or "") for f in frfs}
+    if len(refs) > 1:
+        raise MeasurementError(where, f"the FRFs have different references "
+                                      f"({', '.join(sorted(refs))}); load them separately")
+    for f in frfs:
+        if (len(f.values), f.x0, f.dx) != (len(first.values), first.x0, first.dx):
+            raise MeasurementError(f.file, f"frequency lines ({len(f.values)} from {f.x0:g} "
+                                           f"Hz by {f.dx:g} Hz) differ from "
+                                           f"{first.name!r}'s", f.name)
+    frfs = _keep(where, frfs, channels, "the FRFs are of {}")
+    units, file_units = {}, {}
+    for f in frfs:
+        out, inp = split_ratio(f.unit)
+        if inp not in EXCITATION_UNITS:
+            raise MeasurementError(f.file, f"FRF unit {f.unit!r}: the reference must be in N "
+                                           f"or V", f.name)
+        if units.setdefault("force", inp) != inp:
+            raise MeasurementError(f.file, f"FRF per {inp}, the others per "
+                                           f"{units['force']}", f.name)
+        units[f.name] = out
+        file_units[f.name] = split_ratio(f.file_unit)[0]
+    file_units["force"] = units["force"]
+    notes = []
+    lv, origin = level, "given"
+    if lv is None:
+        lv, origin = level_from_name(paths[0]), "folder name"
+    if lv is None:
+        notes.append("the level is unknown (no level given, none in the folder name): the "
+                     "model cannot be driven as the rig was")
+    run = str(first.record.get("run") or "")
+    kind, direction = run_excitation(run)
+    coh = {c.name: c.values for c in coherence if c.name in units
+           and len(c.values) == len(first.values)}
+    record = FRFRecord.checked(
+        where, first.x, {f.name: f.values for f in frfs}, units, coherence=coh, kind=kind,
+        direction=direction, averages=_int_or_none(first.record.get("averages")),
+        estimator=str(first.record.get("method") or "") or None,
+        meta={"source": "LMS Test.Lab", "run": run, "reference": refs.pop(),
+              "level_from": origin if lv is not None else None,
+              "lms": {f.name: _meta(f) for f in frfs}})
+    if kind or direction:
+        notes.append(f"from the run name {run!r}: "
+                     + ", ".join(x for x in (kind and kind.replace("_", " "),
+                                             direction and f"driven {direction}") if x))
+    return Measurement(file=where, signals=record, units=file_units,
+                       level=None if lv is None else float(lv), notes=notes)
+
+
+def _keep(where: str, funcs: list[LMSFunction], channels: Sequence[str] | None,
+          listing: str) -> list[LMSFunction]:
+    """The functions of ``channels`` (all without), or an error naming a missing one and
+    listing (``listing.format(names)``) what is there."""
+    if channels is None:
+        return funcs
+    avail = [f.name for f in funcs]
+    for ch in channels:
+        if ch not in avail:
+            raise MeasurementError(where, "missing channel; " + listing.format(
+                ", ".join(avail)), ch)
+    return [f for f in funcs if f.name in channels]
 
 
 def _meta(f: LMSFunction) -> dict:

@@ -306,16 +306,25 @@ def _plain(v):
 
 def lms_struct(values, increment: float, labels: Sequence[str], unit: str = "g",
                ids: Sequence[int] | None = None, kind: str = "Signal",
-               mks: bool = True, start: float = 0.0) -> dict:
+               mks: bool = True, start: float = 0.0, reference: str | None = None,
+               per: str = "V", run: str | None = None) -> dict:
     """A dict that :func:`scipy.io.savemat` writes as an LMS function struct (for tests and
     examples): ``values`` in SI units, ``(n,)`` or ``(n, k)``; ``unit`` is the label, one of
-    g, m/s^2, m/s, m, V, N; with ``mks=False`` the values are stored in the labelled unit."""
+    g, m/s^2, m/s, m, V, N; with ``mks=False`` the values are stored in the labelled unit.
+    ``kind="FRF"``: complex values per ``per`` (N or V) on lines ``start + increment k``
+    Hz, H1 against the channel ``reference``; ``run`` the Test.Lab run name."""
     table = {"g": ((1, 0, 0, -2), 1 / 9.80665), "m/s^2": ((1, 0, 0, -2), 1.0),
              "m/s": ((1, 0, 0, -1), 1.0), "m": ((1, 0, 0, 0), 1.0),
              "V": ((2, 0, 1, -3, -1), 1.0), "N": ((1, 0, 1, -2), 1.0)}
     exps, factor = table[unit]
     exps = (*exps, 0, 0, 0, 0, 0)[:8]
-    vals = np.asarray(values, float)
+    frf = kind.upper() == "FRF"
+    label = unit
+    if frf:
+        den = (*table[per][0], 0, 0, 0, 0, 0)[:8]
+        exps = tuple(a - b for a, b in zip(exps, den, strict=True))
+        label = f"{unit}/{per}"
+    vals = np.asarray(values, complex if frf else float)
     k = 1 if vals.ndim == 1 else vals.shape[1]
 
     def quantity(label, ex, fac):
@@ -336,15 +345,24 @@ def lms_struct(values, increment: float, labels: Sequence[str], unit: str = "g",
         return arr
 
     ids = list(ids) if ids is not None else list(range(1, k + 1))
-    return {
-        "x_values": {"start_value": float(start), "increment": float(increment),
-                     "number_of_values": float(vals.shape[0]),
-                     "quantity": quantity("s", (0, 0, 0, 1, 0, 0, 0, 0), 1.0)},
-        "y_values": {"values": vals if mks else vals * factor,
-                     "quantity": quantity(unit, exps, factor)},
-        "function_record": {"name": col(f"Time {lb}" for lb in labels), "type": kind,
-                            "primary_channel": {"id": col(float(i) for i in ids),
-                                                "label": col(labels)},
-                            "average": {"nr_of_averages": col([1.0] * k),
-                                        "type": col(["LINAVERAGE"] * k)}},
-    }
+    record = {"name": col(f"{'FRF' if frf else 'Time'} {lb}" + (f"/{reference}" if frf
+                                                                  else "") for lb in labels),
+              "type": kind,
+              "primary_channel": {"id": col(float(i) for i in ids), "label": col(labels)},
+              "average": {"nr_of_averages": col([1.0] * k),
+                          "type": col(["LINAVERAGE"] * k)}}
+    if frf:
+        record["reference_channel"] = {"label": col([reference or "Shaker:-X"] * k),
+                                       "id": col([99.0] * k)}
+        record["frf"] = {"method": col(["H1"] * k)}
+    if run is not None:
+        record["TL_export_properties_annotation"] = {"run_name": col([run] * k)}
+    x_exps = (0, 0, 0, -1, 0, 0, 0, 0) if frf else (0, 0, 0, 1, 0, 0, 0, 0)
+    x_values = {"start_value": float(start), "increment": float(increment)}
+    if not frf:
+        x_values["number_of_values"] = float(vals.shape[0])
+    x_values["quantity"] = quantity("Hz" if frf else "s", x_exps, 1.0)
+    return {"x_values": x_values,
+            "y_values": {"values": vals if mks else vals * factor,
+                         "quantity": quantity(label, exps, factor)},
+            "function_record": record}

@@ -169,3 +169,43 @@ def test_uff58_roundtrip(tmp_path, good):
     np.testing.assert_allclose(m.signals.channels["a1"], good.channels["a1"], rtol=1e-5,
                                atol=1e-9)
     np.testing.assert_allclose(m.signals.force, good.force, rtol=1e-5, atol=1e-9)
+
+
+def test_sidecar_round_trips_any_string_and_refuses_null(tmp_path, good):
+    """The sidecar goes through tomlkit (issue 26): a non-BMP character (written by the old
+    json.dumps writer as an escaped surrogate pair that TOML rejects) and nested values come
+    back as written, and load() reads the file; a None, which TOML cannot hold, is an error
+    naming its key before anything is written."""
+    import tomllib
+
+    meta = {"note": "😀 Grüße", "effects": ["micro_slip@joint"], "rig": {"noise": 0.02}}
+    f = csv(tmp_path, good, level=0.5, meta=meta)
+    side = tomllib.loads(f.with_suffix(".toml").read_text(encoding="utf-8"))
+    assert side == {"fs": pytest.approx(20000.0), "level": 0.5, **meta}
+    assert load(f).level == 0.5
+    for bad, where in (({"x": None}, r"meta\['x'\]"),
+                       ({"effects": ["a", None]}, r"meta\['effects'\]\[1\]")):
+        out = tmp_path / "null.csv"
+        with pytest.raises(MeasurementError, match=rf"null\.toml: {where} is None, which TOML "
+                                                   r"cannot hold"):
+            csv(tmp_path, good, name="null.csv", meta=bad)
+        assert not out.exists() and not out.with_suffix(".toml").exists()
+    with pytest.raises(MeasurementError, match=r"meta\['level'\]: the sidecar's own key"):
+        csv(tmp_path, good, name="own.csv", level=1.0, meta={"level": 2.0})
+
+
+def test_a_velocity_channel_keeps_its_dimension(tmp_path, good):
+    """A response is converted to the SI unit of its own dimension: the beam's laser
+    velocity, written by ``sensfw simulate studies/bert.toml`` as ``Laser [m/s]``, was
+    refused (converted to m/s^2); in mm/s it is scaled to m/s; an acceleration in g to
+    m/s^2 as before."""
+    v = good.channels["a1"]
+    sig = Signals(t=good.t, force=good.force, channels={"Laser": v, "acc": v}, fs=good.fs,
+                  units={"force": "V", "Laser": "m/s", "acc": "m/s^2"})
+    f = csv(tmp_path, sig)
+    m = load(f)
+    assert m.signals.units == {"force": "V", "Laser": "m/s", "acc": "m/s^2"}
+    g = tmp_path / "mm.csv"
+    g.write_text(f.read_text().replace("Laser [m/s]", "Laser [mm/s]"))
+    np.testing.assert_allclose(load(g).signals.channels["Laser"], 1e-3 * m.signals.channels[
+        "Laser"], rtol=1e-9)

@@ -348,8 +348,7 @@ def test_added_mass_is_amplitude_independent(study, runner, tmp_path):
     # the report shows the table, the plot and the sentence
     from sensfw.report.measure import write_compare_report
 
-    html = write_compare_report(study, cmp.levels, cmp.pairs, cmp.amplitude, cmp.notes,
-                                tmp_path / "report.html").read_text()
+    html = write_compare_report(study, cmp, tmp_path / "report.html").read_text()
     assert "Amplitude dependence" in html and "6.4 % below the model" in html
     assert html.count("<img") >= 4
     # one level: the table, no class, every candidate allowed

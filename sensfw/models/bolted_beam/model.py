@@ -207,7 +207,10 @@ class BoltedBeam(Model):
         # Newton: modified (Jacobian kept while it converges: one iteration per step for the
         # linear model; Jenkins elements switch between stick and slip inside it, where a
         # contraction below 0.5 renews the Jacobian); where effects added bodies, modified
-        # with a patient renewal (simulation.PATIENT); a failure is retried with full Newton
+        # with a patient renewal (simulation.PATIENT); a failure is retried with full Newton.
+        # A step that fails with full Newton too, at every step Exudyn may reduce it to
+        # (simulation.solve), is a divergence at this step, which the runs retry at half the
+        # step (sensfw.runs.spec.simulate_with_halving, [solver] halvings)
         newton = "patient" if self.assembly(p).added else "modified"
         while True:
             built = self.build(p, excitation, user_functions=user_functions,
@@ -219,8 +222,8 @@ class BoltedBeam(Model):
                 break
             except exu.SolverError as exc:
                 if newton == "full" or solver.method not in simulation.IMPLICIT:
-                    raise SimulationError(self.name, f"Exudyn solver error: {exc}",
-                                          p) from None
+                    raise DivergenceError(self.name, f"Exudyn solver error: {exc}", p,
+                                          step=choice.step) from None
                 newton = "full"
         if not channels:
             raise SimulationError(self.name, "Exudyn solver did not finish", p)
@@ -236,8 +239,8 @@ class BoltedBeam(Model):
                        f_inst=excitation.f_inst(t),
                        units={"force": "N", **{c: self.units[c] for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
-                             "method": solver.method,
-                             "newton": newton, **choice.to_meta()},
+                             "method": solver.method, "newton": newton,
+                             "steps": built.steps, **choice.to_meta()},
                        sweep_end=excitation.sweep_end)
 
     def time_step(self, p: Mapping[str, float], fs: float, solver: SolverSettings

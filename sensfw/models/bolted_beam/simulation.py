@@ -12,13 +12,16 @@ load function; sensors are ``SensorNode`` (acceleration or velocity) of the poin
 
 Time integration: Exudyn's implicit generalised-alpha (Chung & Hulbert 1993) at a fixed
 step, or an explicit Runge-Kutta method (see :class:`~.model.BoltedBeam` for why implicit).
+A step whose Newton iteration fails is retried by Exudyn at half the step, at most
+``STEP_REDUCTIONS`` times; one that fails at the smallest of them ends the run with
+``exudyn.SolverError`` at once (see :func:`solve`).
 """
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -29,9 +32,15 @@ from .assembly import Structure
 IMPLICIT = ("GeneralizedAlpha", "TrapezoidalIndex2")
 #: relative residual at which Newton stops (see :func:`solve`)
 NEWTON_TOLERANCE = 1e-6
-#: absolute residual (N, RMS per coordinate) at which Newton stops, per N of the largest
-#: excitation force (see :func:`solve`)
+#: absolute residual (N, L2 norm over the coordinates) at which Newton stops, per N of the
+#: largest excitation force, unless the round-off floor sets more (see :func:`solve`)
 NEWTON_ABSOLUTE = 1e-6
+#: Newton's absolute tolerance is at least this multiple of the residual's round-off floor
+#: (:func:`residual_floor`, a bound that the measured floor stays below; see :func:`solve`)
+NEWTON_FLOOR = 2.0
+#: how often Exudyn may halve a step whose Newton iteration failed before the run fails
+#: (its smallest step is the run's step / 2**STEP_REDUCTIONS; see :func:`solve`)
+STEP_REDUCTIONS = 6
 #: modified Newton for bodies that effects add (``newton="patient"``): the Jacobian
 #: (differentiated numerically, the cost of a step) is renewed only when an iteration
 #: contracts the residual by less than 0.9 (Exudyn's default 0.5). Measured when micro_slip's
@@ -46,9 +55,59 @@ PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12
 SensorSpec = tuple[str, str, float, str, int]
 
 
+@dataclass
+class BeamBuilt(Built):
+    """:class:`~sensfw.models.planar.exudyn.Built` with the round-off floor of Newton's
+    residual for this system (N, :func:`residual_floor`) and the steps :func:`solve`
+    took."""
+
+    residual_floor: float = 0.0
+    steps: int = 0
+
+
+def residual_floor(structure: Structure, z0: np.ndarray) -> float:
+    """The round-off floor (N) of Newton's residual for the system :func:`build` makes of
+    ``structure`` at the static state ``z0``: the residual no number of iterations gets below.
+
+    Exudyn evaluates a connector from its markers' *positions*, reference plus coordinate
+    (``NodePoint2D``), and the law subtracts the reference offset again (:func:`build`). A
+    position ``p`` is rounded to ``eps |p|`` (``eps`` = 2.2e-16), so a connector's
+    elongation is only known to ``eps |p|`` whatever the drive level, and a connector of
+    stiffness ``k`` carries a force error up to ``k eps |p|``: with the joint at 1e7 N/mm
+    (2.5e9 N/m per interface point, at x = 0.23-0.27 m) 1.5e-7 N per interface point.
+    Exudyn's residual is the L2 norm of ``M a + D v + K q - f`` over all coordinates, so its
+    floor is bounded by
+
+    ``|| |K_c| (eps |p|) ||_2``
+
+    with ``K_c`` the connectors' tangent stiffness at ``z0`` (the structure's stiffness
+    less the beams') and ``p`` every coordinate's position (its reference x for an axial
+    coordinate, 0 for a transverse one, plus ``z0``). The beams' own forces ``K q`` act on
+    the coordinates themselves (displacements, not positions) and their round-off is
+    orders of magnitude smaller; so is that of the static forces (``eps`` x 1 kN for the
+    clamp's preload). At the calibrated linear model's values the bound is 7.9e-7 N with
+    the joint at 1e7 N/mm, 7.9e-8 at 1e6 and 7.9e-9 at 1e5, and it scales with the joint's
+    stiffness; the largest residuals of six full Newton iterations on the first step
+    (Exudyn verbose output, 0.5 mV RMS of noise through 55.7 N/V) were 1.7e-7, 3.3e-8 and
+    1.9e-9 N: below the bound, and independent of the drive level (1.4e-7 and 2.7e-7 N at
+    a drive a thousand times larger). Laws that stiffen with the motion (a cubic spring, a
+    clearance closing) are at their softest at ``z0``; they matter at large motion, where
+    the force-scaled term of :func:`newton_tolerance` is the larger one.
+    """
+    _, K, _ = structure.linear_matrices(z0)
+    K_c = K - structure.stiffness()
+    p = np.zeros(structure.n)
+    for (_, x), i in structure.index.items():
+        p[i] = x  # the axial coordinate's reference; the transverse one's is 0
+    for b, j in structure.body_index.items():
+        p[j:j + 2] = structure.reference(b, (0.0, 0.0))
+    p = np.abs(p + z0)
+    return float(np.linalg.norm(np.abs(K_c) @ (np.finfo(float).eps * p)))
+
+
 def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
           loads: Sequence[tuple[str, float, Callable]] = (),
-          sensors: Sequence[SensorSpec] = (), user_functions: str = "symbolic") -> Built:
+          sensors: Sequence[SensorSpec] = (), user_functions: str = "symbolic") -> BeamBuilt:
     """Assemble the reduced beams, force elements, loads ``(body, x, force(ops, t))`` and
     sensors at the state ``z0`` (not yet solved). ``D`` is the damping matrix of the
     structure's coordinates."""
@@ -128,7 +187,8 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
             outputVariableType=getattr(exu.OutputVariableType, quantity)))
         handles[name] = (s, comp)
     mbs.Assemble()
-    built = Built(SC=SC, mbs=mbs, sensors=handles, q0=z0, keep=keep)
+    built = BeamBuilt(SC=SC, mbs=mbs, sensors=handles, q0=z0, keep=keep,
+                      residual_floor=residual_floor(structure, z0))
     if sliders is not None:
         def coordinate_index(body, r, axis):
             if body == a.ground:
@@ -222,17 +282,77 @@ class JenkinsSliders:
 _serial = itertools.count()
 
 
-def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
+def failure(solver, ss, method: str, exc: Exception) -> str:
+    """Why Exudyn's ``solver`` (``mbs.sys["dynamicSolver"]``) stopped integrating with
+    ``method`` under the settings ``ss``, and where."""
+    it, conv, ti = solver.it, solver.conv, ss.timeIntegration
+    if method not in IMPLICIT:
+        return f"{exc} at t = {it.currentTime:.6g} s"
+    h = ti.endTime / ti.numberOfSteps
+    where = (f"at t = {it.currentTime:.6g} s (the step {h:.4g} s reduced to "
+             f"{it.currentStepSize:.4g} s)")
+    if conv.linearSolverFailed:
+        return f"singular Jacobian {where}"
+    if not conv.newtonConverged:
+        return (f"Newton did not converge {where}: residual {conv.residual:.3g} N after "
+                f"{it.newtonSteps} iterations, tolerance {ti.newton.absoluteTolerance:.3g} N "
+                f"absolute or {ti.newton.relativeTolerance:.3g} relative")
+    return f"{exc} {where}"
+
+
+def newton_tolerance(force_scale: float, floor: float) -> float:
+    """Newton's absolute tolerance (N, on the L2 norm of the residual) for a run whose
+    largest excitation force is ``force_scale`` (N) and whose residual has the round-off
+    floor ``floor`` (N, :func:`residual_floor`).
+
+    ``max(NEWTON_ABSOLUTE force_scale, NEWTON_FLOOR floor)``. The first term, 1e-6 N per N
+    of drive, is far below the forces that matter at any drive level: an unconverged
+    residual ``r`` acts on the structure like an error force of at most ``r``, so the
+    response is off by at most ``r / force_scale`` of its size. On its own it falls below
+    the floor at small drives (1.4e-7 N for the 0.05 V random record of UNESP-BERT, whose
+    peak force is 0.14 N, against a floor bound of 7.9e-7 N with the joint at 1e7 N/mm):
+    Newton can then never converge. The second term keeps the tolerance above the floor
+    with a margin of 2 on the bound, itself 3.5 times the largest residual measured at the
+    floor (2.3e-7 N; with a margin of 0.25 instead of 2 the suite's 0.5 mV noise failed at
+    its seventh step, with 0.5 it ran). It only binds where the first falls below it, and
+    there Newton stops at twice what double precision can resolve: 1.6e-6 N with the joint
+    at 1e7 N/mm, 5e-5 of the drive's RMS at the 0.05 V random record (0.03 N). The sweeps'
+    drives (2.8 N peak at 0.05 V and more) keep the first term above it even with that
+    joint: their runs are as they were."""
+    return max(NEWTON_ABSOLUTE * force_scale, NEWTON_FLOOR * floor)
+
+
+def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
           spectral_radius: float = 0.8, force_scale: float = 1.0,
           newton: str = "modified") -> dict[str, np.ndarray]:
-    """Integrate at the fixed step ``1 / (fs substeps)`` and return every sensor's ``n_out``
-    samples at ``fs``; raises ``exudyn.SolverError`` or returns short/non-finite channels
-    when the solver fails. ``force_scale`` is the largest excitation force (N), which
-    scales Newton's absolute tolerance; ``newton`` is ``"modified"`` (Exudyn's defaults:
-    the Jacobian kept while Newton contracts by 0.5 per iteration), ``"patient"`` (kept
+    """Integrate at the step ``1 / (fs substeps)`` (smaller steps where Newton fails, see
+    below) and return every sensor's ``n_out`` samples at ``fs``; raises
+    ``exudyn.SolverError`` or returns short/non-finite channels when the solver fails.
+    ``force_scale`` is the largest excitation force (N), which scales Newton's absolute
+    tolerance (:func:`newton_tolerance`, with the system's ``built.residual_floor``);
+    ``newton`` is ``"modified"`` (Exudyn's defaults: the Jacobian kept while Newton
+    contracts by 0.5 per iteration), ``"patient"`` (kept
     while it contracts by 0.9, up to 12 iterations; see ``PATIENT``) or ``"full"`` (a new
     Jacobian at every iteration; see :meth:`~.model.BoltedBeam.simulate`). Always resets
-    the system."""
+    the system.
+
+    Exudyn retries a step whose Newton iteration failed at half the step
+    (``timeIntegration.adaptiveStep``) and doubles it again after ten good steps. The
+    micro-slip model needs this where its Jenkins sliders switch between stick and slip
+    inside a step: Newton cycles there at the run's step and converges at a smaller one
+    (on the six UNESP-BERT sweeps with the calibrated micro-slip model, 465-4161 steps
+    retried, down to 1/32 of the step at 0.15-0.30 V, 2.4-24 % more steps). Exudyn's
+    default floor for it, ``minimumStepSize`` = 1e-8 s (1/12000 of the step), let a step
+    that cannot converge at any size (Newton's tolerance below the round-off floor, before
+    :func:`newton_tolerance`) crawl through the record at ~2 ms of signal per second
+    without an error until the run's timeout (300 s). Here the smallest step is the run's
+    step / 2**``STEP_REDUCTIONS`` (1/64: one halving below the deepest retry measured), so
+    such a step fails after seven attempts (the step and six halvings) of 25 Newton
+    iterations each, in milliseconds:
+    ``exudyn.SolverError`` naming the time and Newton's residual. The caller decides (the
+    model retries with full Newton, then reports a divergence, which the runs' step
+    halving, ``[solver] halvings``, retries at half the step). The steps taken are in
+    ``built.steps`` (the planned ``n_out substeps`` plus the retried ones)."""
     import exudyn as exu
 
     mbs, SC = built.mbs, built.SC
@@ -241,6 +361,9 @@ def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
     ti.endTime = n_out / fs
     ti.numberOfSteps = n_out * substeps
     ti.automaticStepSize = False
+    # a step whose Newton iteration failed is retried at half the step, down to 1/64
+    ti.adaptiveStep = True
+    ti.minimumStepSize = ti.endTime / ti.numberOfSteps / 2**STEP_REDUCTIONS
     ti.verboseMode = 0
     ss.solution.file.write = False
     ss.solution.sensors.writePeriod = 1.0 / fs
@@ -258,12 +381,8 @@ def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
         # Jacobian); Exudyn's default 1e-8 forced a second step and a Jacobian update every
         # other step (6x slower for the same signals)
         ti.newton.relativeTolerance = NEWTON_TOLERANCE
-        # in a free decay the step's residual falls to a floor that grows with the level of
-        # the response (1 N at the nominal values: ~1e-10 N; 1.5 N with the stiffest joint:
-        # above 1e-8 N); with a tolerance below it Newton never converged (70 iterations
-        # per step: 700 s for an 8 s tail). 1e-6 N per N of excitation force is far below
-        # the forces that matter and above that floor.
-        ti.newton.absoluteTolerance = NEWTON_ABSOLUTE * max(force_scale, 1e-4)
+        # never below the residual's round-off floor (see newton_tolerance)
+        ti.newton.absoluteTolerance = newton_tolerance(force_scale, built.residual_floor)
         # the connectors' Jacobian is differentiated numerically with a step of
         # 1e-7 x max(|q|, minimumCoordinateSize); Exudyn's default 0.01 m gives 1e-9 m,
         # i.e. a velocity step of ~1.6e-5 m/s at this step size, wider than the stick band of
@@ -275,8 +394,14 @@ def solve(built: Built, fs: float, n_out: int, substeps: int, method: str,
         ti.explicit.computeEndOfStepAccelerations = False
         ti.discontinuous.useRecommendedStepSize = False
     try:
-        ok = mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, method))
+        try:
+            ok = mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, method))
+        except exu.SolverError as exc:
+            raise exu.SolverError(failure(mbs.sys["dynamicSolver"], ss, method, exc)) \
+                from None
         channels = {}
+        # the step index is one past the last step taken (it starts at 1)
+        built.steps = int(mbs.sys["dynamicSolver"].it.currentStepIndex) - 1
         if ok is not False:
             for name, (s, comp) in built.sensors.items():
                 data = np.asarray(mbs.GetSensorStoredData(s))

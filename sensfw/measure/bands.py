@@ -1,0 +1,176 @@
+"""The FRF of a record in fractional-octave bands, and the record's own noise.
+
+The comparison bands (:func:`analysis_bands`: one-third octaves, finer for a narrow sweep),
+the smoothed Hv FRF in dB (:func:`frf_db`), each band's coherent H1 (:func:`band_frf_db`) and
+its standard error from the record's output noise (:func:`band_noise`, :func:`noise_sigma`:
+one local fit of the FRF, :func:`_local_fit`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..models.base import Signals
+from ..signal import frf, octave_smooth
+
+#: FRF settings of every comparison: Hv over the whole record, smoothed for the metrics
+SMOOTH = 24  # 1/24 octave
+
+
+def octave_bands(fmin: float, fmax: float, fraction: int = 3
+                 ) -> list[tuple[float, float, float]]:
+    """(lower, centre, upper) of the base-10 1/``fraction``-octave bands (IEC 61260:
+    centres ``1000 * 10^(3n / (10 fraction))``) inside ``[fmin, fmax]``."""
+    out = []
+    step = 3.0 / (10.0 * fraction)  # decades per band
+    for n in range(int(np.floor(np.log10(fmin / 1000) / step)) - 1,
+                   int(np.ceil(np.log10(fmax / 1000) / step)) + 2):
+        c = 1000.0 * 10 ** (n * step)
+        lo, hi = c / 10 ** (step / 2), c * 10 ** (step / 2)
+        if lo >= fmin * (1 - 1e-9) and hi <= fmax * (1 + 1e-9):
+            out.append((lo, c, hi))
+    return out
+
+
+def third_octave_bands(fmin: float, fmax: float) -> list[tuple[float, float, float]]:
+    """The one-third-octave bands (IEC 61260) inside ``[fmin, fmax]``."""
+    return octave_bands(fmin, fmax, 3)
+
+
+#: fractions of an octave the comparison bands may take
+FRACTIONS = (3, 6, 12, 24, 48)
+
+
+def analysis_bands(fmin: float, fmax: float, at_least: int = 12
+                   ) -> list[tuple[float, float, float]]:
+    """The comparison bands of a sweep over ``[fmin, fmax]``: one-third octaves, or the
+    coarsest finer fraction that gives ``at_least`` bands (a narrow sweep, such as 70-110 Hz,
+    holds only one third-octave)."""
+    for fraction in FRACTIONS:
+        bands = octave_bands(fmin, fmax, fraction)
+        if len(bands) >= at_least:
+            return bands
+    return bands
+
+
+def frf_db(sig: Signals, channel: str, band: tuple[float, float], smooth: int = SMOOTH,
+           complex_frf: bool = False):
+    """(f, dB magnitude) of the Hv FRF, 1/``smooth``-octave smoothed, inside ``band``
+    (with ``complex_frf`` also the unsmoothed complex FRF on the same lines)."""
+    f, H = frf(sig.force, sig.channel(channel), sig.fs, estimator="Hv")
+    mag = octave_smooth(f, H, smooth)
+    sel = (f >= band[0]) & (f <= band[1]) & (mag > 0)
+    if complex_frf:
+        return f[sel], 20 * np.log10(mag[sel]), H[sel]
+    return f[sel], 20 * np.log10(mag[sel])
+
+
+def band_frf_db(sig: Signals, channel: str, bands) -> np.ndarray:
+    """dB magnitude of the FRF averaged coherently over each band,
+    ``H_b = sum_b conj(P) X / sum_b |P|^2`` (H1 over the band's bins): noise averages down
+    with the number of bins while the swept signal adds up."""
+    P = np.fft.rfft(sig.force)
+    X = np.fft.rfft(sig.channel(channel))
+    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    out = []
+    for lo, _, hi in bands:
+        sel = (f >= lo) & (f < hi)
+        num = np.sum(np.conj(P[sel]) * X[sel])
+        den = np.sum(np.abs(P[sel]) ** 2)
+        out.append(20 * np.log10(np.abs(num / den)) if den > 0 and num != 0 else np.nan)
+    return np.array(out)
+
+
+def _local_fit(sig: Signals, channel: str, half_width: int = 4):
+    """(f, P, H_k, per-bin residual power) of the local fit of :func:`band_noise`: ``X_j ~
+    (a_k + b_k (j - k)) P_j`` over the ``2 half_width + 1`` bins around each bin ``k`` (an
+    FRF that varies linearly across the window, so a resonance of a few per cent damping
+    leaves little structure in the residual), ``H_k = a_k``, the residual corrected for the
+    two fitted degrees of freedom."""
+    P = np.fft.rfft(sig.force)
+    X = np.fft.rfft(sig.channel(channel))
+    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    j = np.arange(-half_width, half_width + 1, dtype=float)
+    pp = np.abs(P) ** 2
+    px = np.conj(P) * X
+
+    def local(x, weights):  # sum over the window around each bin of weights[j] x[k + j]
+        return np.convolve(x, weights[::-1], mode="same")
+
+    s0, s1, s2 = local(pp, np.ones_like(j)), local(pp, j), local(pp, j * j)
+    t0, t1 = local(px, np.ones_like(j)), local(px, j)
+    det = s0 * s2 - s1 * s1
+    ok = det > 1e-12 * np.maximum(s0 * s2, 1e-300)
+    Hk = np.divide(t0 * s2 - t1 * s1, det, out=np.zeros_like(t0), where=ok)
+    resid = np.abs(X - Hk * P) ** 2 * (len(j) / (len(j) - 2))
+    return f, P, Hk, resid
+
+
+def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.ndarray:
+    """Relative standard error of each band's H1 (:func:`band_frf_db`) from the output
+    noise of the record itself.
+
+    With ``X = H P + N`` the band estimate ``sum conj(P) X / sum |P|^2`` has the relative
+    error ``sqrt(sigma_N^2 / sum_b |H P|^2)``. The per-bin noise variance ``sigma_N^2`` is
+    estimated from the residual of the local fit of :func:`_local_fit`. Bands whose error is
+    large are noise-limited: the measurement cannot say there how wrong the model is (and
+    a nonlinear structure's distortion counts as noise here: :func:`compare_level` takes the
+    model's own share out)."""
+    f, P, Hk, resid = _local_fit(sig, channel, half_width)
+    out = []
+    for lo, _, hi in bands:
+        sel = (f >= lo) & (f < hi)
+        signal = np.sum(np.abs(Hk[sel] * P[sel]) ** 2)
+        noise = np.sum(resid[sel]) / max(int(sel.sum()), 1)  # per-bin variance
+        out.append(float(np.sqrt(noise / signal)) if signal > 0 else np.inf)
+    return np.array(out)
+
+
+def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
+    """Standard deviation of the output noise of a record (assumed white), from the
+    residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n sigma^2``,
+    read off a low quantile of the residual power over the bins (the power of complex
+    Gaussian noise is exponential, so its ``q``-quantile is ``-ln(1 - q)`` times its mean).
+
+    Exact for a linear response; harmonic distortion of a swept record does not follow
+    the local fit either (its phase turns by ~1 rad per line relative to the force's), so a
+    strongly nonlinear record gives an upper bound: the low quantile keeps to the lines
+    where the distortion is weakest. 0 for a noise-free linear record."""
+    _, _, _, resid = _local_fit(sig, channel)
+    q = float(np.quantile(resid[1:], quantile)) / -np.log1p(-quantile)
+    return float(np.sqrt(q / len(sig.force)))
+
+
+def band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) -> float:
+    """RMS of ``x`` within ``band`` (Parseval over the record's DFT lines in the band): the
+    level of a random excitation over the band a comparison looks at."""
+    X = np.fft.rfft(np.asarray(x, float))
+    f = np.fft.rfftfreq(len(x), 1 / fs)
+    tol = 1e-9 * band[1]  # a line on the band's edge counts, whatever the rate's rounding
+    sel = (f >= band[0] - tol) & (f <= band[1] + tol) & (f > 0)
+    weight = np.where((f[sel] == fs / 2), 1.0, 2.0)  # the Nyquist line is not mirrored
+    return float(np.sqrt(np.sum(weight * np.abs(X[sel]) ** 2)) / len(x))
+
+
+def line_noise_db(sig: Signals, channel: str, band: tuple[float, float], draws: int = 3,
+                  seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(f, per-line dB) of what the record's own output noise does to its smoothed FRF
+    (:func:`frf_db`): white noise of the record's level (:func:`noise_sigma`) is added
+    ``draws`` times and the RMS change of each line taken. A correct (noise-free) model
+    differs from the record by one noise realisation, so this is the line error the
+    measurement's noise alone gives it (the record's own noise is common to both smoothed
+    FRFs and cancels to first order)."""
+    sigma = noise_sigma(sig, channel)
+    x = sig.channel(channel)
+    base = Signals(t=sig.t, force=sig.force, channels={channel: x}, fs=sig.fs)
+    f, db = frf_db(base, channel, band)
+    rng = np.random.default_rng(seed)
+    acc = np.zeros(len(f))
+    for _ in range(draws):
+        noisy = Signals(t=sig.t, force=sig.force, fs=sig.fs,
+                        channels={channel: x + sigma * rng.standard_normal(len(x))})
+        f2, db2 = frf_db(noisy, channel, band)
+        if len(f2) != len(f):  # a line whose magnitude vanished: compare on the common ones
+            db2 = np.interp(f, f2, db2)
+        acc += (db2 - db) ** 2
+    return f, np.sqrt(acc / draws)

@@ -1,0 +1,107 @@
+"""Measured columns -> a :class:`~sensfw.measure.measurement.Measurement`: units to SI (the
+excitation a force or a voltage, a response in the SI unit of its dimension), the sidecar of
+a file, and the checks of the time column (uniform, increasing, the declared rate). Shared
+by the CSV and UFF readers (:mod:`sensfw.measure.io`, :mod:`sensfw.measure.uff`).
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MeasurementError
+from ..models.base import Signals
+from .measurement import Measurement
+
+TARGET_UNITS = {"time": "s", "force": "N"}
+ACCEL_UNIT = "m/s^2"
+def quantity(unit: str):
+    """A pint quantity of 1 ``unit`` (``g`` is standard gravity)."""
+    from ..study import units
+
+    u = unit.strip()
+    if u.lower() in ("g", "gn", "g0", "g_n"):
+        u = "standard_gravity"
+    return units().Quantity(1.0, u)
+
+
+def factor(file: str, column: str, unit: str | None, target: str) -> float:
+    """Multiplier from ``unit`` to ``target``."""
+    if not unit:
+        return 1.0
+    try:
+        return float(quantity(unit).to(target).magnitude)
+    except Exception as err:
+        raise MeasurementError(file, f"unit {unit!r} cannot be converted to {target}: {err}",
+                               column) from None
+
+
+def sidecar(path: Path) -> dict:
+    for ext, reader in ((".toml", tomllib.loads), (".json", json.loads)):
+        side = path.with_suffix(ext) if path.suffix != ext else None
+        side2 = Path(str(path) + ext)
+        for candidate in (side, side2):
+            if candidate is not None and candidate.exists():
+                try:
+                    return reader(candidate.read_text(encoding="utf-8"))
+                except Exception as err:
+                    raise MeasurementError(str(candidate), f"unreadable sidecar: {err}") \
+                        from None
+    return {}
+
+
+#: the SI units a response channel is converted to: the first of its dimension
+SI_UNITS = ("m/s^2", "m/s", "m", "N", "V", "Pa", "rad/s^2", "rad/s", "rad")
+
+
+def fits(unit: str, si: str) -> bool:
+    try:
+        return quantity(unit).dimensionality == quantity(si).dimensionality
+    except Exception:
+        return False
+
+
+def target(column: str, unit: str | None = None) -> str:
+    """SI unit a column is converted to: the excitation is a force or a voltage, a response
+    is converted to the SI unit of its dimension (:data:`SI_UNITS`; an acceleration where
+    no unit is given)."""
+    if column in TARGET_UNITS and column != "force":
+        return TARGET_UNITS[column]
+    if column == "force":
+        return "V" if unit and fits(unit, "V") else "N"
+    return next((si for si in SI_UNITS if unit and fits(unit, si)), ACCEL_UNIT)
+
+
+def assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_declared,
+              level) -> Measurement:
+    if "time" not in columns:
+        raise MeasurementError(file, "no 'time' column", "time")
+    if "force" not in columns:
+        raise MeasurementError(file, "no 'force' column (the excitation force)", "force")
+    for name, x in columns.items():
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise MeasurementError(file, f"{int(bad.sum())} NaN/inf value(s), first in data "
+                                         f"row {i + 1}", name)
+    t = columns["time"]
+    dt = np.diff(t)
+    if len(dt) == 0 or np.any(dt <= 0):
+        raise MeasurementError(file, "time is not strictly increasing", "time")
+    step = float(np.median(dt))
+    if np.max(np.abs(dt - step)) > 1e-3 * step:
+        worst = int(np.argmax(np.abs(dt - step)))
+        raise MeasurementError(file, f"non-uniform sampling: step {dt[worst]:.6g} s at row "
+                                     f"{worst + 2} vs {step:.6g} s elsewhere", "time")
+    fs = 1.0 / step
+    if fs_declared is not None and abs(fs - float(fs_declared)) > 1e-3 * float(fs_declared):
+        raise MeasurementError(file, f"sample rate from the time column is {fs:.6g} Hz but the "
+                                     f"sidecar declares fs = {fs_declared} Hz", "time")
+    channels = {k: v for k, v in columns.items() if k not in ("time", "force")}
+    sig = Signals(t=t - t[0], force=columns["force"], channels=channels, fs=fs,
+                  units={k: target(k, unit_map.get(k)) for k in ("force", *channels)})
+    return Measurement(file=file, signals=sig, units=dict(unit_map),
+                       level=None if level is None else float(level))

@@ -1,0 +1,97 @@
+"""What a linear FRF does not show: harmonic order amplitudes of a swept record (Eqs. 12-17)
+with their noise floor, and the DC offset with its standard error.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..models.base import Signals
+from ..signal import harmonic_amplitudes
+from .bands import noise_sigma
+
+
+def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3)
+              ) -> dict[int, float]:
+    """RMS order amplitudes ``P_1`` and ``P_k`` (Eqs. 12-17) of a swept record, each ratio
+    ``P_k / P_1`` over the part of the sweep where order ``k`` stays below 0.45 fs (so H3 is
+    measured even where the whole sweep only allows order 2). Returns ``{1: P_1 (whole
+    sweep), k: P_1(part) * ratio_k}``; empty without a sweep (random excitation)."""
+    if sig.f_inst is None:
+        return {}
+    s = sig.sweep()
+    x, fr = s.channel(channel), np.asarray(s.f_inst, float)
+    out = harmonic_amplitudes(x, s.fs, fr, harmonics=(1,))
+    for k in orders:
+        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
+        if n < 0.1 * len(fr):
+            continue
+        part = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1, k))
+        if part[1] > 0:
+            out[k] = out[1] * part[k] / part[1]
+    return out
+
+
+def harmonic_floor(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3),
+                   seed: int = 0) -> dict[int, float]:
+    """Noise floor of each ratio ``P_k / P_1`` of :func:`harmonics`: the order amplitude
+    that the record's output noise alone gives at order ``k``, over the same part of the
+    sweep, divided by that part's ``P_1``.
+
+    The noise is white with the standard deviation of :func:`noise_sigma`; its order
+    amplitude is computed on a realisation of it (the order spectrum averages over frames,
+    so one realisation varies by a few per cent). Noise adds in power, ``P_k^2 ~ P_k,true^2
+    + P_k,noise^2``: a measured ratio within a few dB of its floor says little about the
+    harmonic. (The spectrum between the orders is no noise estimate for a fast sweep: the
+    ring-down of each resonance smears across orders there.)"""
+    if sig.f_inst is None:
+        return {}
+    sigma = noise_sigma(sig, channel)
+    s = sig.sweep()
+    x, fr = s.channel(channel), np.asarray(s.f_inst, float)
+    noise = sigma * np.random.default_rng(seed).standard_normal(len(x))
+    out = {}
+    for k in orders:
+        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
+        if n < 0.1 * len(fr):
+            continue
+        p1 = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1,))[1]
+        pk = harmonic_amplitudes(noise[:n], s.fs, fr[:n], harmonics=(k,))[k]
+        if p1 > 0:
+            out[k] = float(pk / p1)
+    return out
+
+
+def dc_offset(sig: Signals, channel: str) -> float:
+    """Mean of the output over the sweep (an asymmetric contact or a preload can shift it;
+    for an accelerometer mostly the sensor's own offset)."""
+    return float(np.mean(sig.sweep().channel(channel)))
+
+
+def dc_standard_error(sig: Signals, channel: str) -> float:
+    """Standard error of :func:`dc_offset` from the output noise: ``sigma / sqrt(n)`` for
+    the mean over the sweep's ``n`` samples (:func:`noise_sigma`)."""
+    return noise_sigma(sig, channel) / float(np.sqrt(len(sig.sweep().force)))
+
+
+def harmonic_rows(hm: dict[int, float], hx: dict[int, float],
+                  floor: dict[int, float] | None = None) -> list[dict]:
+    """The harmonic table of a comparison: per order both sides have, the model's and the
+    measured amplitude (``{1: P_1, k: P_k}`` as :func:`harmonics` gives them), their
+    ratios to ``P_1``, the measured ratio's noise floor and the difference (dB)."""
+    rows = []
+    for k in sorted(set(hm) & set(hx)):
+        rows.append({"order": k, "model": hm[k], "measured": hx[k],
+                     "model_ratio": hm[k] / hm[1] if hm.get(1) else None,
+                     "measured_ratio": hx[k] / hx[1] if hx.get(1) else None,
+                     "measured_floor_ratio": (floor or {}).get(k),
+                     "difference_db": float(20 * np.log10(hm[k] / hx[k]))
+                     if hm[k] > 0 and hx[k] > 0 else None})
+    return rows
+
+
+def thd(h: dict[int, float]) -> float | None:
+    """THD (%) of order amplitudes ``{1: P_1, k: P_k}``: ``100 sqrt(sum_k>=2 P_k^2) / P_1``
+    (Eq. 16), None without harmonics."""
+    return float(100 * np.sqrt(sum(v**2 for k, v in h.items() if k >= 2)) / h[1]) \
+        if h.get(1) and len(h) > 1 else None
