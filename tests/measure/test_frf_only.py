@@ -217,8 +217,8 @@ def test_a_stiffer_rig_shows_in_the_error_and_the_resonance(tmp_path, runner):
 def test_compare_level_takes_an_frf_record_as_the_measured_side(tmp_path, runner):
     """What a calibration calls (``compare_level(m.signals, sig, ...)``, detail=False)
     works on an FRF-only measurement: its ``signals`` is the FRF record."""
-    from sensfw.measure.compare import compare_level
     from sensfw.evaluate import simulate, variant_spec
+    from sensfw.measure.compare import compare_level
     from sensfw.measure.prepared import load_measurements
 
     lines = np.arange(150.0, 551.0, 20.0)
