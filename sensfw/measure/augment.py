@@ -58,8 +58,11 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         given = {k: float(base_start[k]) for k in names if k in base_start}
         if given:
             res.evaluate(None, [{**nominal, **given}], "base start")
+    # from a diagnosis's values: refine only (its global search found them)
+    local = {"global_share": 0.0, "n_design": 0}
     h0.fit = calibrate_hypothesis(res, h0, int(0.35 * budget) // n_levels, q=q,
-                                  refine=refine, log=log)
+                                  refine=refine, log=log,
+                                  **(local if base_start is not None else {}))
     widen_for_roughness(res, h0.fit, log)
     h = Hypothesis(eff, eff.attach, base + Coordinates.of(None, eff.parameters()))
     added = {**h0.fit.values, **{p.name: p.nominal for p in eff.parameters()}}
@@ -83,8 +86,10 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
                               f"{res.failures.get(f'probes {h.name}', '?')}")
     left = (budget - res.n_simulations) // n_levels
     log(f"calibrating {h.name} jointly with {', '.join(names)} ({left} points)")
+    design = local if start is not None else {"design_box": _around(h0, h),
+                                               "n_design": len(h.own) + 1}
     h.fit = calibrate_hypothesis(res, h, max(left, 2 * h.k + 4), q=q, refine=refine,
-                                 design_box=_around(h0, h), n_design=len(h.own) + 1, log=log)
+                                 log=log, **design)
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),
              ("effect added", h.effects, added), ("jointly calibrated", h.effects,
                                                   h.fit.values)]
