@@ -9,6 +9,10 @@
   0.6-1.6 (log-uniform, inside their bounds);
 * noise 1-5 % of each channel's RMS, one to three levels from 0.03-0.2 N.
 
+``--study bert`` draws the same kind of cases on the bolted beam's study (its joint and beam
+effects, its four calibration variables, the shaker's voltage at 0.05-0.3 V) with a short
+record (a 3 s sweep over 85-100 Hz and a 1 s tail).
+
 Each case is diagnosed with every candidate (``sensfw diagnose`` without ``--candidates``)
 and the default budget. Printed: the confusion of verdicts, the rate at which the true
 hypothesis's calibrated chi2 is within the noise (``chi2 / n <= 1 + 3 sqrt(2 / n)``),
@@ -50,21 +54,33 @@ import tomllib  # noqa: E402
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-LEVELS = (0.03, 0.05, 0.1, 0.2)
+#: the levels a case draws from (N for the quick study, V for the beam)
+LEVELS = {"quick": (0.03, 0.05, 0.1, 0.2), "bert": (0.05, 0.1, 0.2, 0.3)}
 MARGIN = 10.0
 
 
-def quick_study(short: bool = False):
+def bench_study(name: str, short: bool = False):
+    """The quick study (``short``: the test suite's 0.15 s chirp at a 2e-5 s step), or the
+    bolted beam's study with a short record: a 3 s sweep over 85-100 Hz (the second mode)
+    and a 1 s tail instead of 8 s + 8 s."""
     from sensfw.study import Study
 
-    data = tomllib.loads((ROOT / "studies" / "quick.toml").read_text())
-    if short:  # the test suite's settings: a 0.15 s chirp at a 2e-5 s step
+    data = tomllib.loads((ROOT / "studies" / f"{name}.toml").read_text())
+    if name == "quick" and short:
         data["excitation"]["duration"] = "0.15 s"
         data["solver"]["step"] = "2e-5 s"
-    return Study.from_dict(data, "quick-short" if short else "quick")
+    if name == "bert":
+        data["excitation"].update({"f0": "85 Hz", "f1": "100 Hz", "duration": "3 s",
+                                   "tail": "1 s"})
+        data["excitation"].pop("drive", None)
+        for stage in data["stages"]:  # the stages are not run; their bands must fit
+            for sc in stage["scorers"]:
+                if "band" in sc:
+                    sc["band"] = [86.0, 99.0]
+    return Study.from_dict(data, f"{name}-short" if short or name == "bert" else name)
 
 
-def draw_case(study, seed: int) -> dict:
+def draw_case(study, seed: int, levels=LEVELS["quick"]) -> dict:
     """One random case (module docstring) from ``seed``."""
     from sensfw.evaluate import model_with_effects
     from sensfw.measure.calibration import Coordinates
@@ -103,7 +119,7 @@ def draw_case(study, seed: int) -> dict:
     case["sets"] = space.to_parameters({**space.nominal_row(), **base})
     case["noise"] = float(rng.uniform(0.01, 0.05))
     n = int(rng.integers(1, 4))
-    case["levels"] = sorted(float(x) for x in rng.choice(LEVELS, size=n, replace=False))
+    case["levels"] = sorted(float(x) for x in rng.choice(levels, size=n, replace=False))
     return case
 
 
@@ -185,9 +201,9 @@ def outcome(case: dict, named: list[str], verdict: str, can_tell: bool) -> str:
 def summary(rows: list[dict]) -> None:
     by = {}
     for r in rows:
-        by.setdefault(r["method"], []).append(r)
-    for method, rs in by.items():
-        print(f"method {method}: {len(rs)} cases")
+        by.setdefault(f"{r.get('study', 'quick')}, method {r['method']}", []).append(r)
+    for key, rs in by.items():
+        print(f"{key}: {len(rs)} cases")
         counts: dict = {}
         for r in rs:
             counts[r["outcome"]] = counts.get(r["outcome"], 0) + 1
@@ -225,7 +241,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=None, help="append each case to this JSONL")
     ap.add_argument("--merge", type=Path, nargs="*", help="print the figures of these parts")
-    ap.add_argument("--short", action="store_true", help="0.15 s chirp (the test suite's)")
+    ap.add_argument("--short", action="store_true", help="quick study: 0.15 s chirp (the "
+                    "test suite's)")
+    ap.add_argument("--study", choices=["quick", "bert"], default="quick",
+                    help="bert: the bolted beam's joint and beam effects, a 3 s sweep")
     ap.add_argument("--verbose", action="store_true")
     args = ap.parse_args()
     if args.merge:
@@ -233,10 +252,11 @@ def main() -> None:
                 if line.strip()]
         summary(rows)
         return
-    study = quick_study(args.short)
+    study = bench_study(args.study, args.short)
     rows = []
     for i in range(args.first, args.first + args.cases):
-        case = draw_case(study, args.seed + i)
+        case = draw_case(study, args.seed + i, LEVELS[args.study])
+        case["study"] = study.name
         r = run_case(study, case, args.method, args.workers,
                      log=print if args.verbose else (lambda s: None))
         truth = f"{case['effect']}@{case['place']}" if case["effect"] else "no effect"

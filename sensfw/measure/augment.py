@@ -100,6 +100,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         trajectory.append({"step": label, "error": res.rms_db(c),
                            "error_per_level": res.rms_db_per_level(c),
                            "levels": [m.level for m in measurements],
+                           "kinds": res.kinds,
                            "params": dict(values)})
     own = set(h.own)
     result = {"effect": effect, "attach": eff.attach, "variables": names,
@@ -112,6 +113,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
               "surrogate": h.fit.info.get("surrogate"), "chi2": h.fit.chi2,
               "notes": h.notes, "trajectory": trajectory,
               "n_simulations": res.n_simulations, "budget": budget,
+              "records": res.records(), "kind_weights": res.kind_weights,
               "comparison": {k: [x.to_dict() for x in v] if v else None
                              for k, v in comps.items()},
               "_comparisons": comps}

@@ -187,6 +187,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
         errors={"nominal": res.rms_db(nominal_cmp), "parameters": res.rms_db(h0_all),
                 "best": res.rms_db(best_all) if best_all else None},
         criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3, "budget": budget,
+                  "records": res.records(), "kind_weights": res.kind_weights,
                   "refine": refine, "model_db": discrepancy.MODEL_DB,
                   "thd_db": discrepancy.THD_DB, "model_scatter_db": scatter},
         residuals=res)

@@ -49,6 +49,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
     trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":
                    res.rms_db_per_level(c), "levels": [m.level for m in measurements],
+                   "kinds": res.kinds,
                    "params": dict(values)}
                   for label, c, values in (("nominal model", nominal_cmp, nominal),
                                            ("calibrated", cal_cmp, fit.values))]
@@ -60,6 +61,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
               "fits_noise": discrepancy.fits(fit.best.w, len(base)),
               "model_scatter_db": scatter, "trajectory": trajectory,
               "n_simulations": res.n_simulations, "budget": budget,
+              "records": res.records(), "kind_weights": res.kind_weights,
               "comparison": {"nominal model": [c.to_dict() for c in
                                                res.output_comparisons(nominal_cmp)],
                              "calibrated": [c.to_dict() for c in

@@ -6,6 +6,12 @@ model share -> weighted residual vectors (:mod:`sensfw.measure.discrepancy`).
 Every channel counts: a rig's accelerometers see the structure from different places, and
 what one channel cannot tell apart (a heavier crankshaft or a softer bearing) another can.
 
+Records of different kinds (sweeps, random excitation, stepped sines, FRFs alone) enter
+together, each driving the model as it was driven; each kind's entries are weighted by
+``sqrt(n / (K n_k))`` (``n`` entries in all, ``n_k`` of the kind, ``K`` kinds) so that every
+kind counts as much as the others whatever its number of bands and channels, while a
+correct model still leaves ``chi2 ~ n`` (each kind's expected ``n_k`` becomes ``n / K``).
+
 Every residual vector computed is kept as a :class:`~sensfw.measure.calibration.Trial` of
 its model variant (:meth:`Residuals.trials`), so that hypotheses share evidence: the runs
 of "parameters only" are every candidate's runs at the candidate's neutral values, and a
@@ -38,6 +44,16 @@ def shared_channels(study: Study, measurements: Sequence[Measurement]) -> list[s
     return [study.output] + [c for c in common if c != study.output]
 
 
+def record_kind(m: Measurement) -> str:
+    """What kind of record a measurement is: ``"log_chirp"``, ``"linear_sweep"``,
+    ``"stepped_sine"``, ``"random"`` (time data, from the estimated excitation) or
+    ``"frf"`` (FRFs alone)."""
+    if m.frf is not None:
+        return "frf"
+    kind = getattr(m.sweep, "kind", None)
+    return kind if kind in ("log_chirp", "linear_sweep", "stepped_sine") else "random"
+
+
 def effects_key(effects: EffectSpecs | None) -> tuple:
     return tuple(tuple(sorted(dict(e).items())) for e in effects or ())
 
@@ -52,6 +68,8 @@ class Residuals:
         self.study, self.meas, self.runner = study, list(measurements), runner
         self.space = space
         self.channels = list(channels) if channels else shared_channels(study, measurements)
+        self.kinds = [record_kind(m) for m in self.meas]
+        self.kind_weights: dict[str, float] = {}
         ex = study.excitation
         self.band = (ex.f0, ex.f1)
         self.n_simulations = 0
@@ -104,6 +122,12 @@ class Residuals:
             first = next((c for c in out if c is not None), None)
             if first is not None:
                 self.entries = discrepancy.Entries.of(first)
+                sizes = [s.stop - s.start for s in self.level_slices()]
+                per = {k: sum(n for n, kk in zip(sizes, self.kinds, strict=True) if kk == k)
+                       for k in dict.fromkeys(self.kinds)}
+                total = sum(per.values())
+                self.kind_weights = {k: float(np.sqrt(total / (len(per) * n)))
+                                     for k, n in per.items()}
         if self.entries is not None:  # every residual vector is evidence for later
             pool = self._pool.setdefault(effects_key(effects), [])
             pool += [(tuple(idx), Trial(dict(p), self.weighted(c, levels)))
@@ -159,7 +183,25 @@ class Residuals:
         return self.entries.select([i * k + c for i in levels for c in range(k)])
 
     def weighted(self, comps, levels: Sequence[int] | None = None) -> np.ndarray | None:
-        return None if comps is None else discrepancy.weighted(comps, self._entries(levels))
+        """Residuals divided by their standard errors, each record's by its kind's weight
+        (module docstring)."""
+        if comps is None:
+            return None
+        return discrepancy.weighted(comps, self._entries(levels)) * self.entry_weights(levels)
+
+    def entry_weights(self, levels: Sequence[int] | None = None) -> np.ndarray | float:
+        """Each entry's kind weight (module docstring); 1 with one kind of record."""
+        if len(set(self.kind_weights.values())) <= 1:
+            return 1.0
+        idx = list(range(self.n_levels)) if levels is None else list(levels)
+        sizes = [s.stop - s.start for s in self.level_slices()]
+        return np.concatenate([np.full(sizes[i], self.kind_weights[self.kinds[i]])
+                               for i in idx])
+
+    def records(self) -> list[dict]:
+        """Per record (in the order of the residual vector): file, kind, level."""
+        return [{"file": m.file, "kind": k, "level": m.level}
+                for m, k in zip(self.meas, self.kinds, strict=True)]
 
     def level_slices(self) -> list[slice]:
         """The entries of each level (all its channels) in the residual vector."""

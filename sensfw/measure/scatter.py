@@ -33,12 +33,13 @@ def roughness(res: Residuals, fit: Fit, effects=(), delta: float = 0.01) -> np.n
     zs = [np.clip(z + s * delta * np.eye(d)[i], -1, 1) for i in range(d) for s in (-1, 1)]
     ws = res.evaluate(effects, [{**fit.best.values, **coords.decode(zz)} for zz in zs],
                       "model scatter")
-    r0 = fit.best.w * sigma
+    dB = sigma / res.entry_weights()  # weighted residual -> dB
+    r0 = fit.best.w * dB
     second = []
     for i in range(d):
         a, b = ws[2 * i], ws[2 * i + 1]
         if a is not None and b is not None:
-            second.append((a * sigma + b * sigma) / 2 - r0)
+            second.append((a * dB + b * dB) / 2 - r0)
     if not second:
         return np.zeros(len(sigma))
     return np.sqrt(np.mean(np.square(second), axis=0) / 1.5)

@@ -87,6 +87,10 @@ def resonance_levels(pairs: dict[str, list]):
     return fig
 
 
+def _record_label(level: float, kind: str) -> str:
+    return f"{level:.3g}" + (f" {kind.replace('_', ' ')}" if kind else "")
+
+
 def _surrogate_cell(q: dict | None) -> str:
     """The residual surrogate's leave-one-out error per entry (in standard errors of the
     entries) over its best quarter of runs, and its runs."""
@@ -202,8 +206,10 @@ def write_augment_report(study, result: dict, path, comparisons: dict | None = N
         for xi, e in zip(x, per, strict=True):
             ax.text(xi, 0 if e is None else e, "failed" if e is None else f"{e:.2f}",
                     ha="center", va="bottom", fontsize=7)
-    ax.set_xticks(np.arange(len(levels)), [f"{lv:.3g}" for lv in levels])
-    ax.set_xlabel("level")
+    kinds = tr[0].get("kinds") or [""] * len(levels)
+    ax.set_xticks(np.arange(len(levels)), [_record_label(lv, k) for lv, k in
+                                           zip(levels, kinds, strict=True)])
+    ax.set_xlabel("record (level, kind)")
     ax.set_ylabel("FRF error (dB RMS)")
     ax.set_title("The error falls, level by level")
     ax.legend(fontsize=8)
@@ -247,9 +253,10 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
     if result.get("surrogate"):
         page.p("Residual surrogate, leave-one-out error per entry (standard errors): "
                f"{_surrogate_cell(result['surrogate'])}.")
-    page.table(pd.DataFrame([{"level": lv, **{t["step"]: t["error_per_level"][i]
-                                              for t in tr}}
-                             for i, lv in enumerate(tr[0]["levels"])]).set_index("level"))
+    kinds = tr[0].get("kinds") or [""] * len(tr[0]["levels"])
+    page.table(pd.DataFrame([{"record": _record_label(lv, kinds[i]),
+                              **{t["step"]: t["error_per_level"][i] for t in tr}}
+                             for i, lv in enumerate(tr[0]["levels"])]).set_index("record"))
     if comparisons:
         page.figure(frf_levels(comparisons, "FRF per level"), "Measured (black) against the "
                     "nominal and the calibrated model.")
