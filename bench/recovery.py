@@ -144,7 +144,7 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None) -
     meas = load_measurements(study, files)
     t0 = time.perf_counter()
     with Runner(RunStore(tmp / "runs"), backend="processes", workers=workers) as runner:
-        res = diagnose(study, meas, runner, log=log, refine="lm" if method != "dfols" else
+        res = diagnose(study, meas, runner, log=log, local="lm" if method != "dfols" else
                        "dfols", global_phase=method != "local")
         wall = time.perf_counter() - t0
         rows = {r["hypothesis"]: r for r in res.rows}

@@ -31,7 +31,7 @@ def default_budget(n_levels: int) -> int:
 def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, effect: str,
             attach: str | None = None, start: Mapping[str, float] | None = None,
             base_start: Mapping[str, float] | None = None, budget: int | None = None,
-            refine: str = "dfols", study_text: str | None = None,
+            local: str = "dfols", study_text: str | None = None,
             log=lambda s: None) -> dict:
     """Calibrate ``effect`` at ``attach`` (default: its preferred place) jointly with the
     study's calibration variables. ``start`` (e.g. the values :func:`diagnose` found: base
@@ -61,7 +61,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     # from a diagnosis's values: refine only (its global search found them)
     local = {"global_share": 0.0, "n_design": 0}
     h0.fit = calibrate_hypothesis(res, h0, int(0.35 * budget) // n_levels, q=q,
-                                  refine=refine, log=log,
+                                  local=local, log=log,
                                   **(local if base_start is not None else {}))
     widen_for_roughness(res, h0.fit, log)
     h = Hypothesis(eff, eff.attach, base + Coordinates.of(None, eff.parameters()))
@@ -88,7 +88,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     log(f"calibrating {h.name} jointly with {', '.join(names)} ({left} points)")
     design = local if start is not None else {"design_box": _around(h0, h),
                                                "n_design": len(h.own) + 1}
-    h.fit = calibrate_hypothesis(res, h, max(left, 2 * h.k + 4), q=q, refine=refine,
+    h.fit = calibrate_hypothesis(res, h, max(left, 2 * h.k + 4), q=q, local=local,
                                  log=log, **design)
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),
              ("effect added", h.effects, added), ("jointly calibrated", h.effects,

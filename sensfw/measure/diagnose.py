@@ -56,7 +56,7 @@ def workers_of(runner: Runner) -> int:
 
 
 def calibrate_hypothesis(res: Residuals, h: Hypothesis, budget: int, *,
-                         levels: list[int] | None = None, q: int = 2, refine: str = "dfols",
+                         levels: list[int] | None = None, q: int = 2, local: str = "dfols",
                          design_box=None, n_design=None, global_share: float = 0.6,
                          log: Log = lambda s: None) -> Fit:
     """Calibrate ``h`` on ``levels`` (default all) with at most ``budget`` points, its
@@ -70,7 +70,7 @@ def calibrate_hypothesis(res: Residuals, h: Hypothesis, budget: int, *,
     label = f"calibrate {h.name}" + ("" if levels is None else
                                      f" on level {', '.join(str(i + 1) for i in levels)}")
     fit = calibrate(lambda pts: res.evaluate(h.effects, pts, label, levels), h.coords,
-                    budget, evidence=evidence, q=q, refine=refine, design_box=design_box,
+                    budget, evidence=evidence, q=q, refine=local, design_box=design_box,
                     n_design=n_design, global_share=global_share, log=log)
     if levels is None and h.fit is not None and h.fit.chi2 < fit.chi2:
         fit.best, fit.jacobian = h.fit.best, h.fit.jacobian  # never worse than before
@@ -80,7 +80,7 @@ def calibrate_hypothesis(res: Residuals, h: Hypothesis, budget: int, *,
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
              candidates: Sequence[str] | None = None, final: int = 2,
              min_delta_bic: float = 10.0, budget: int | None = None, prune: bool = True,
-             refine: str = "dfols", global_phase: bool = True, log: Log = lambda s: None
+             local: str = "dfols", global_phase: bool = True, log: Log = lambda s: None
              ) -> DiagnoseResult:
     """Diagnose the missing physics (module docstring). ``candidates`` are effect names
     (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it
@@ -88,7 +88,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     candidates at most (and those the channels cannot tell apart from them) are
     calibrated at every level; ``prune=False`` keeps the candidates whose signature
     classes the levels do not show (the classes name what the levels reveal, not every
-    mechanism); ``refine`` is the local least-squares method (``"dfols"`` or ``"lm"``,
+    mechanism); ``local`` is the local least-squares method (``"dfols"`` or ``"lm"``,
     :mod:`.calibration.refine`); ``global_phase=False`` leaves out the design and the
     surrogate search (a local calibration from the start values, as diagnosis did before:
     ``bench/recovery.py --method local``)."""
@@ -98,8 +98,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
     q = workers_of(runner)
-    opts = {"q": q, "refine": refine} if global_phase else \
-        {"q": q, "refine": refine, "global_share": 0.0, "n_design": 0}
+    opts = {"q": q, "local": local} if global_phase else \
+        {"q": q, "local": local, "global_share": 0.0, "n_design": 0}
     base = Coordinates.of(space)
     nominal = space.nominal_row()
     (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
@@ -188,7 +188,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
                 "best": res.rms_db(best_all) if best_all else None},
         criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3, "budget": budget,
                   "records": res.records(), "kind_weights": res.kind_weights,
-                  "refine": refine, "model_db": discrepancy.MODEL_DB,
+                  "refine": local, "model_db": discrepancy.MODEL_DB,
                   "thd_db": discrepancy.THD_DB, "model_scatter_db": scatter},
         residuals=res)
 

@@ -27,7 +27,7 @@ def default_budget(n_levels: int) -> int:
 
 
 def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,
-                budget: int | None = None, refine: str = "dfols",
+                budget: int | None = None, local: str = "dfols",
                 study_text: str | None = None, log=lambda s: None) -> dict:
     """Calibrate the study's base variables alone (module docstring); ``budget`` counts
     simulations (one per point and level; default 60 points)."""
@@ -44,7 +44,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     log(f"calibrating {', '.join(names)} ({source}), {budget} simulations")
     h0 = Hypothesis(None, "", base)
     fit = calibrate_hypothesis(res, h0, budget // n_levels, q=workers_of(runner),
-                               refine=refine, log=log)
+                               local=local, log=log)
     scatter = widen_for_roughness(res, fit, log)
     (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
     trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":

@@ -103,7 +103,7 @@ CASES = [
 def test_offsets_and_an_effect_name_the_effect_and_its_place(hidden, candidates, study,
                                                              runner, tmp_path):
     meas = measure(study, tmp_path, hidden)
-    res = diagnose(study, meas, runner, candidates=candidates, refine=1)
+    res = diagnose(study, meas, runner, candidates=candidates, final=1)
     truth = hidden.split(":")[0]
     assert res.verdict == truth, (res.reason, [(r["hypothesis"], round(r["chi2"], 1))
                                                for r in res.rows])
@@ -116,7 +116,7 @@ def test_offsets_and_an_effect_name_the_effect_and_its_place(hidden, candidates,
 def test_noise_and_offsets_never_give_an_effect(noise, seed, study, runner, tmp_path):
     meas = measure(study, tmp_path, noise=noise, seed=seed)
     res = diagnose(study, meas, runner, candidates=["added_mass@crankshaft",
-                                                    "damping@bearing_l3"], refine=1)
+                                                    "damping@bearing_l3"], final=1)
     assert res.verdict in ("parameters", "none"), (res.reason, res.rows[1:])
     check_nested(res)
 
@@ -254,7 +254,7 @@ def test_a_clearance_crossed_between_two_levels_is_found_with_its_gap(study, run
     meas = measure(study, tmp_path, hidden, levels=(0.03, 0.1))
     res = diagnose(study, meas, runner, candidates=["limit_stop@crankshaft",
                                                     "limit_stop@driveshaft",
-                                                    "contact_hardening@bearing_l1"], refine=1)
+                                                    "contact_hardening@bearing_l1"], final=1)
     assert res.verdict == "limit_stop@crankshaft", (
         res.reason, [(r["hypothesis"], round(r["chi2"], 1)) for r in res.rows])
     row = next(r for r in res.rows if r["hypothesis"] == res.verdict)

@@ -1,0 +1,80 @@
+"""Residual vectors of hypotheses against measurements (sensfw/measure/residuals.py): the
+evidence kept for every variant and records of several kinds."""
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sensfw.measure.io import write_csv
+from sensfw.measure.prepared import load_measurements
+from sensfw.measure.residuals import Residuals
+from sensfw.measure.synthetic import Rig, synthesize
+from sensfw.runs import Runner, RunStore
+from sensfw.study import Study
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def study():
+    data = tomllib.loads((ROOT / "studies" / "quick.toml").read_text())
+    data["excitation"]["duration"] = "0.1 s"
+    data["solver"]["step"] = "2e-5 s"
+    return Study.from_dict(data, "quick-short")
+
+
+@pytest.fixture(scope="module")
+def runner(tmp_path_factory):
+    with Runner(RunStore(tmp_path_factory.mktemp("runs")), backend="processes",
+                workers=2) as r:
+        yield r
+
+
+@pytest.fixture(scope="module")
+def records(study, tmp_path_factory):
+    """A log chirp at 0.05 and 0.1 N and a random record at 0.1 N, 2 % noise."""
+    tmp = tmp_path_factory.mktemp("records")
+    files = []
+    for i, (kind, level) in enumerate([(None, 0.05), (None, 0.1), ("random", 0.1)]):
+        sig, _ = synthesize(study, amplitude=level, excitation=kind,
+                            rig=Rig(noise=0.02, seed=i))
+        files.append(str(write_csv(tmp / f"m{i}.csv", sig, level=level)))
+    return load_measurements(study, files)
+
+
+def test_records_of_two_kinds_count_alike(study, records, runner):
+    """Two chirps and one random record: each kind's entries carry half the weight of the
+    residual vector whatever their number (``n_k w_k^2 = n / 2``), so the correct model
+    still leaves chi2 near n; the per-record list says which is which."""
+    space = study.calibration_space(list(study.spec.calibration.parameters))
+    res = Residuals(study, records, runner, space)
+    (w,) = res.evaluate(None, [space.nominal_row()], "nominal")
+    kinds = [r["kind"] for r in res.records()]
+    assert sorted(set(kinds)) == ["log_chirp", "random"]
+    sizes = [s.stop - s.start for s in res.level_slices()]
+    n = sum(sizes)
+    for kind in set(kinds):
+        n_k = sum(size for size, k in zip(sizes, kinds, strict=True) if k == kind)
+        assert n_k * res.kind_weights[kind] ** 2 == pytest.approx(n / 2)
+    assert res.kind_weights["log_chirp"] != pytest.approx(res.kind_weights["random"])
+    assert len(w) == n
+
+
+def test_a_run_at_every_level_is_evidence_for_each_level(study, records, runner):
+    """The residuals kept from a run at every level, cut to one level, are those of the run
+    at that level alone (the same simulation from the run store, the same weights): the
+    screen on one level reuses every run of "parameters only"."""
+    space = study.calibration_space(list(study.spec.calibration.parameters))
+    res = Residuals(study, records, runner, space)
+    point = {**space.nominal_row(), "slide_stiffness": 9e5}
+    res.evaluate(None, [space.nominal_row(), point], "all levels")
+    (alone,) = res.evaluate(None, [point], "level 3", levels=[2])
+    kept = [t for t in res.trials(None, levels=[2]) if t.values == point]
+    assert len(kept) == 2  # the run at every level, cut, and the one at level 3
+    for t in kept:
+        assert np.allclose(t.w, alone, rtol=0, atol=1e-12)
+    # with the neutral values of an effect, H0's trials stand for the candidate's
+    extra = res.trials(None, levels=[2], extra={"added_mass": 0.0})
+    assert all(t.values["added_mass"] == 0.0 for t in extra)
