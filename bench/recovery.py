@@ -1,13 +1,8 @@
 """How often does diagnosis find the truth? Random synthetic cases on the quick study
-(issue 25), each drawn afresh from its seed:
-
-* an effect and a place drawn from all that fit the shaft model (or, in a quarter of the
-  cases, no effect), its parameters drawn in their calibration coding at 25-100 % of the
-  way from the neutral value to the far bound (parameters without a neutral value anywhere
-  in their range);
-* two or three of the study's calibration variables off nominal by factors drawn in
-  0.6-1.6 (log-uniform, inside their bounds);
-* noise 1-5 % of each channel's RMS, one to three levels from 0.03-0.2 N.
+(issue 25), each drawn afresh from its seed (:func:`sensfw.measure.cases.draw`): an effect
+and a place drawn from all that fit the shaft model (or, in a quarter of the cases, no
+effect) at 25-100 % of its strength, two or three base calibration variables off by 0.6-1.6,
+noise 1-5 %, one to three levels from 0.03-0.2 N.
 
 ``--study bert`` draws the same kind of cases on the bolted beam's study (its joint and beam
 effects, its four calibration variables, the shaker's voltage at 0.05-0.3 V) with a short
@@ -80,87 +75,27 @@ def bench_study(name: str, short: bool = False):
     return Study.from_dict(data, f"{name}-short" if short or name == "bert" else name)
 
 
-def draw_case(study, seed: int, levels=LEVELS["quick"]) -> dict:
-    """One random case (module docstring) from ``seed``."""
-    from sensfw.evaluate import model_with_effects
-    from sensfw.measure.calibration import Coordinates
-    from sensfw.models.places import fitting_places
-    from sensfw.plugins import effects
-
-    rng = np.random.default_rng(seed)
-    model = model_with_effects(study, [])
-    pairs = [(name, place) for name in effects.names()
-             for place in fitting_places(model.places(), effects.get(name))]
-    case: dict = {"seed": seed}
-    if rng.random() < 0.25:
-        case["effect"] = None
-    else:
-        name, place = pairs[int(rng.integers(len(pairs)))]
-        eff = effects.get(name)(attach=place)
-        coords = Coordinates.of(None, eff.parameters())
-        values = {}
-        for a in coords.axes:
-            if a.name in eff.neutral:
-                zn = a.code(eff.neutral[a.name])
-                far = 1.0 if zn <= 0 else -1.0
-                values[a.name] = a.decode(zn + rng.uniform(0.25, 1.0) * (far - zn))
-            else:
-                values[a.name] = a.decode(rng.uniform(-1, 1))
-        case.update(effect=name, place=place, params=values)
-    space = study.calibration_space(list(study.spec.calibration.parameters))
-    k = int(rng.integers(2, 4))
-    chosen = rng.choice(space.names, size=min(k, len(space)), replace=False)
-    base = {}
-    for v in space.variables:
-        if v.name in chosen:
-            f = math.exp(rng.uniform(math.log(0.6), math.log(1.6)))
-            base[v.name] = float(np.clip(v.nominal * f, v.low, v.high))
-    case["base"] = base
-    case["sets"] = space.to_parameters({**space.nominal_row(), **base})
-    case["noise"] = float(rng.uniform(0.01, 0.05))
-    n = int(rng.integers(1, 4))
-    case["levels"] = sorted(float(x) for x in rng.choice(levels, size=n, replace=False))
-    return case
-
-
 def run_case(study, case: dict, method: str, workers: int, log=lambda s: None) -> dict:
-    from sensfw.measure import discrepancy
+    from sensfw.measure import cases, discrepancy
     from sensfw.measure.diagnose import diagnose
-    from sensfw.measure.io import write_csv
     from sensfw.measure.prepared import load_measurements
-    from sensfw.measure.synthetic import Rig, synthesize
     from sensfw.runs import Runner, RunStore
 
     tmp = Path(tempfile.mkdtemp(prefix="sensfw-recovery-"))
-    effect = []
-    if case["effect"]:
-        effect = [f"{case['effect']}@{case['place']}:" + ",".join(
-            f"{k}={v!r}" for k, v in case["params"].items())]
-    files = []
-    for i, level in enumerate(case["levels"]):
-        sig, _ = synthesize(study, sets=case["sets"], effects=effect, amplitude=level,
-                            rig=Rig(noise=case["noise"], seed=case["seed"] * 10 + i))
-        files.append(str(write_csv(tmp / f"m{i}.csv", sig, level=level)))
-    meas = load_measurements(study, files)
+    meas = load_measurements(study, cases.measure(study, case, tmp))
     t0 = time.perf_counter()
     with Runner(RunStore(tmp / "runs"), backend="processes", workers=workers) as runner:
-        res = diagnose(study, meas, runner, log=log, local="lm" if method != "dfols" else
-                       "dfols", global_phase=method != "local")
+        res = diagnose(study, meas, runner, log=log,
+                       local="lm" if method != "dfols" else "dfols",
+                       global_phase=method != "local")
         wall = time.perf_counter() - t0
         rows = {r["hypothesis"]: r for r in res.rows}
         n = res.n_entries
-        truth = f"{case['effect']}@{case['place']}" if case["effect"] else "parameters"
         h0 = rows["parameters"]
-        true_row = rows.get(truth)
+        true_row = rows.get(cases.truth(case))
         # the true hypothesis at its true values (not counted in the diagnosis's runs)
-        ev = res.residuals
-        if case["effect"]:
-            spec = [{"name": case["effect"], "attach": case["place"]}]
-            values = {**{k: v for k, v in case_base_values(study, case).items()},
-                      **case["params"]}
-        else:
-            spec, values = None, case_base_values(study, case)
-        (w,) = ev.evaluate(spec, [values], "truth")
+        spec, values = cases.true_values(study, case)
+        (w,) = res.residuals.evaluate(spec, [values], "truth")
     chi2_truth = float(w @ w) if w is not None else math.inf
     k_true = true_row["k"] if true_row else h0["k"]
     chi2_true_cal = true_row["chi2"] if true_row else math.inf
@@ -173,29 +108,7 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None) -
             "noise_reached": chi2_true_cal / n <= 1 + 3 * math.sqrt(2 / n),
             "truth_fits_noise": discrepancy.fits(w, k_true) if w is not None else False,
             "can_tell": can_tell, "simulations": res.n_simulations, "wall_s": wall,
-            "outcome": outcome(case, res.named, res.verdict, can_tell)}
-
-
-def case_base_values(study, case) -> dict:
-    space = study.calibration_space(list(study.spec.calibration.parameters))
-    return {**space.nominal_row(), **case["base"]}
-
-
-def outcome(case: dict, named: list[str], verdict: str, can_tell: bool) -> str:
-    if not case["effect"]:
-        return "correct" if verdict in ("parameters", "none") else "false discovery"
-    effects = {n.split("@")[0] for n in named}
-    truth = f"{case['effect']}@{case['place']}"
-    if not can_tell:
-        return "correct (cannot tell)" if verdict in ("parameters", "none") else \
-            ("named (cannot tell)" if truth in named else "wrong (cannot tell)")
-    if truth in named and effects == {case["effect"]}:
-        return "right"
-    if verdict in ("parameters", "none"):
-        return "missed"
-    if case["effect"] in effects:
-        return "right effect, wrong place"
-    return "wrong effect"
+            "outcome": cases.outcome(case, res.named, res.verdict, can_tell)}
 
 
 def summary(rows: list[dict]) -> None:
@@ -252,10 +165,12 @@ def main() -> None:
                 if line.strip()]
         summary(rows)
         return
+    from sensfw.measure import cases
+
     study = bench_study(args.study, args.short)
     rows = []
     for i in range(args.first, args.first + args.cases):
-        case = draw_case(study, args.seed + i, LEVELS[args.study])
+        case = cases.draw(study, args.seed + i, LEVELS[args.study])
         case["study"] = study.name
         r = run_case(study, case, args.method, args.workers,
                      log=print if args.verbose else (lambda s: None))
