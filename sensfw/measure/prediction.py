@@ -1,0 +1,140 @@
+"""Predictions with uncertainty: the calibrated model's FRF and resonance on a record as a
+band that the calibration's parameter uncertainty spans, and whether the record is one the
+calibration saw the like of.
+
+The calibration's Laplace covariance (:meth:`sensfw.measure.calibration.Fit.covariance`,
+coded) defines an ellipsoid that holds the parameters with probability ``level``
+(``(z - z0)^T C^-1 (z - z0) <= chi2_d(level)``). The model is simulated at the ``2 d``
+points where that ellipsoid meets its principal axes (the sigma points of an unscented
+transform at the ellipsoid's radius; Julier & Uhlmann 2004), clipped to the box, and the
+band is the envelope of those runs and the calibrated one: on each frequency line the
+lowest and highest model FRF (dB), and the lowest and highest resonance. A record whose
+measured resonance lies outside the resonance band is not predicted within the
+calibration's uncertainty: the model form is missing something, or the calibration is too
+confident. ``2 d`` runs per record, whatever the model's cost (no surrogate is needed for
+so few).
+
+A record is an **extrapolation** when its kind of excitation is none the calibration saw,
+or its level lies outside the levels of that kind the calibration saw (beyond 10 %).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2 as chi2_dist
+
+from .calibration import Coordinates
+
+
+def ellipsoid_points(coords: Coordinates, z: np.ndarray, cov: np.ndarray,
+                     level: float = 0.95) -> list[dict[str, float]]:
+    """The ``2 d`` points (physical values) where the ``level`` ellipsoid of the coded
+    covariance ``cov`` about ``z`` meets its principal axes, clipped to the box."""
+    d = len(z)
+    r = float(np.sqrt(chi2_dist.ppf(level, d)))
+    vals, vecs = np.linalg.eigh(np.asarray(cov, float))
+    out = []
+    for i in range(d):
+        step = r * np.sqrt(max(vals[i], 0.0)) * vecs[:, i]
+        for s in (-1.0, 1.0):
+            out.append(coords.decode(np.clip(z + s * step, -1.0, 1.0)))
+    return out
+
+
+def extrapolation(kind: str, level: float, seen: Sequence[Mapping]) -> str | None:
+    """Why a record of ``kind`` at ``level`` is an extrapolation of a calibration that saw
+    the records ``seen`` (``[{"kind", "level"}, ...]``), or None."""
+    same = [float(r["level"]) for r in seen if r.get("kind") == kind]
+    if not seen:
+        return None
+    if not same:
+        return f"a {kind.replace('_', ' ')} record: the calibration saw none"
+    lo, hi = min(same), max(same)
+    if level < lo / 1.1 or level > hi * 1.1:
+        return (f"level {level:.3g} outside the {kind.replace('_', ' ')} levels the "
+                f"calibration saw ({lo:.3g}-{hi:.3g})")
+    return None
+
+
+@dataclass
+class Band:
+    """The prediction band of one record (see the module docstring)."""
+
+    file: str
+    kind: str
+    level: float
+    f: np.ndarray
+    db_low: np.ndarray
+    db_high: np.ndarray
+    resonance_low: float | None
+    resonance_high: float | None
+    resonance_measured: float | None
+    extrapolation: str | None = None
+
+    @property
+    def contains_resonance(self) -> bool | None:
+        """Whether the measured resonance lies in the band (None: no resonance)."""
+        if None in (self.resonance_low, self.resonance_high, self.resonance_measured):
+            return None
+        return self.resonance_low <= self.resonance_measured <= self.resonance_high
+
+    @property
+    def resonance_width_hz(self) -> float | None:
+        if self.resonance_low is None or self.resonance_high is None:
+            return None
+        return self.resonance_high - self.resonance_low
+
+    @property
+    def width_db_at_resonance(self) -> float | None:
+        """The band's width (dB) on the line nearest the measured resonance."""
+        if self.resonance_measured is None or not len(self.f):
+            return None
+        i = int(np.argmin(np.abs(self.f - self.resonance_measured)))
+        return float(self.db_high[i] - self.db_low[i])
+
+    def to_dict(self) -> dict:
+        return {"file": self.file, "kind": self.kind, "level": self.level,
+                "resonance_band_hz": [self.resonance_low, self.resonance_high],
+                "resonance_measured_hz": self.resonance_measured,
+                "contains_resonance": self.contains_resonance,
+                "resonance_width_hz": self.resonance_width_hz,
+                "width_db_at_resonance": self.width_db_at_resonance,
+                "extrapolation": self.extrapolation}
+
+
+def main_resonance(resonances: Sequence[Mapping], band: tuple[float, float] | None
+                   ) -> tuple[float | None, float | None]:
+    """(measured, model) frequency of the matched resonance nearest the middle of ``band``
+    (the error band), or of the first matched one."""
+    rows = [r for r in resonances if r.get("measured_hz") and r.get("model_hz")]
+    if band is not None:
+        rows = [r for r in rows if band[0] <= r["measured_hz"] <= band[1]] or rows
+    if not rows:
+        return None, None
+    mid = np.sqrt(band[0] * band[1]) if band is not None else rows[0]["measured_hz"]
+    r = min(rows, key=lambda r: abs(np.log(r["measured_hz"] / mid)))
+    return r["measured_hz"], r["model_hz"]
+
+
+def bands(levels: Sequence, samples: Sequence[Sequence], seen: Sequence[Mapping],
+          kinds: Sequence[str]) -> list[Band]:
+    """The band of each record from its comparison with the calibrated model (``levels``)
+    and with the model at each ellipsoid point (``samples[j][i]``: point ``j``, record
+    ``i``; :class:`~sensfw.measure.comparison.LevelComparison`)."""
+    out = []
+    for i, c in enumerate(levels):
+        runs = [c] + [s[i] for s in samples if s[i] is not None]
+        lo = np.min([r.db_model for r in runs], axis=0)
+        hi = np.max([r.db_model for r in runs], axis=0)
+        meas, _ = main_resonance(c.resonances, c.error_band)
+        models = [main_resonance(r.resonances, c.error_band)[1] for r in runs]
+        models = [m for m in models if m is not None]
+        out.append(Band(file=c.file, kind=kinds[i], level=c.level, f=c.f, db_low=lo,
+                        db_high=hi, resonance_low=min(models) if models else None,
+                        resonance_high=max(models) if models else None,
+                        resonance_measured=meas,
+                        extrapolation=extrapolation(kinds[i], c.level, seen)))
+    return out
