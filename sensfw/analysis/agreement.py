@@ -119,6 +119,12 @@ def agreement(ref: Conclusions, table: pd.DataFrame, scores: pd.DataFrame) -> di
         except SurrogateError as err:  # too few runs for 15 coefficients
             out["scores"][label] = {"error": str(err).splitlines()[0]}
             continue
+        A = eq.result_.model.exog
+        if np.linalg.matrix_rank(A) < A.shape[1]:  # p-values of aliased terms mean nothing
+            out["scores"][label] = {"error": f"Eq. 18 is rank-deficient on these runs "
+                                             f"(rank {np.linalg.matrix_rank(A)} of "
+                                             f"{A.shape[1]} terms)"}
+            continue
         gp = make_surrogate("gaussian_process", bounds=ref.bounds, log_features="auto")
         gp.fit(X, y[ok])
         ss = float(np.sum((y[ok] - y[ok].mean()) ** 2))

@@ -1,7 +1,5 @@
 """The 3-level fractions, Table 2's printed medium values and uncertainty sampling (issue 28)."""
 
-import itertools
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -9,7 +7,7 @@ import pytest
 from sensfw.designs import DesignError, make_design
 from sensfw.designs.sequential import propose, uncertainty
 from sensfw.models.shaft_assembly import GROUPS, PARAMETERS
-from sensfw.params import DesignSpace, Parameter, ParameterSet
+from sensfw.params import DesignSpace
 
 TABLE2 = ["slide_damping", "clutch_drive_stiffness", "slide_friction_velocity",
           "clutch_drive_damping"]
@@ -65,9 +63,24 @@ def test_subset_fractions_partition_the_full_factorial_and_are_balanced():
         make_design("subset", fraction=3)
 
 
+@pytest.mark.parametrize("design,options", [("box_behnken", {}),
+                                            ("central_composite", {"center": [1, 0]}),
+                                            ("definitive_screening", {}), ("subset", {})])
+def test_three_level_designs_are_runs_of_the_full_factorial(design, options):
+    """Coded -1 / 0 / 1 are the bounds and the mid-point exactly: mid + c * half misses
+    1.2 (slide_exponent) by 2e-16, and a run at 1.2000000000000002 is another run in the
+    run store than the full factorial's at 1.2 (and lies outside the bounds)."""
+    space = DesignSpace.from_parameters(PARAMETERS, GROUPS, select=[
+        "slide_stiffness", "slide_exponent", "slide_friction_velocity",
+        "clutch_drive_stiffness"])
+    assert space["slide_exponent"].decode(-1.0) != 1.2  # the rounding this guards against
+    full = {tuple(r) for r in make_design("full_factorial").generate(space).to_numpy()}
+    table = make_design(design, **options).generate(space)
+    assert all(tuple(r) in full for r in table.to_numpy())
+    assert table["slide_exponent"].min() == 1.2 and table["slide_friction_velocity"].min() == 0.1
+
+
 def test_uncertainty_sampling_picks_the_candidate_farthest_from_the_runs():
-    ps = ParameterSet([Parameter("x", "", 0.0, -1.0, 1.0)])
-    space = DesignSpace.from_parameters(ps)
     grid = pd.DataFrame({"x": np.linspace(-1, 1, 9)}, index=[f"g{i}" for i in range(9)])
     runs = pd.DataFrame({"x": [-1.0, -0.9, -0.8]}, index=["r0", "r1", "r2"])
     y = pd.DataFrame({"a": np.sin(3 * runs["x"]), "b": 10 + 100 * runs["x"] ** 2})
