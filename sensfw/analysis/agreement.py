@@ -33,16 +33,13 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
 from ..errors import AnalysisError
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ..study import Study
 
 ALPHA, MUST, MUST_NOT = 0.05, 0.001, 0.5
 
@@ -128,8 +125,13 @@ def agreement(ref: Conclusions, table: pd.DataFrame, scores: pd.DataFrame) -> di
         gp = make_surrogate("gaussian_process", bounds=ref.bounds, log_features="auto")
         gp.fit(X, y[ok])
         ss = float(np.sum((y[ok] - y[ok].mean()) ** 2))
-        q2 = {name: 1 - float(np.sum((y[ok] - est.loo_predict()) ** 2)) / ss
-              for name, est in (("eq18", eq), ("gaussian_process", gp))}
+        # leave-one-out is undefined where a run has leverage 1 (Eq. 18 on some fractions):
+        # such a surrogate cannot be chosen by it
+        q2 = {}
+        for name, est in (("eq18", eq), ("gaussian_process", gp)):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                v = 1 - float(np.sum((y[ok] - est.loo_predict()) ** 2)) / ss
+            q2[name] = v if np.isfinite(v) else -np.inf
         chosen = max(q2, key=q2.get)
         est = eq if chosen == "eq18" else gp
         truth = ref.scores.loc[held, label].to_numpy(dtype=float)
@@ -178,8 +180,9 @@ def load_conclusions(folder: str | Path, screen: str, stage: str) -> Conclusions
                        runs=runs)
 
 
-def check_study(study: Study, problems: list[tuple[str, str]]) -> None:
-    """Problems of ``study``'s ``[agree_with]`` section: its stages must exist, the screen
+def check_study(study, problems: list[tuple[str, str]]) -> None:
+    """Problems of ``study``'s ``[agree_with]`` section (``study``: a
+    :class:`~sensfw.study.Study` being validated): its stages must exist, the screen
     with a ``select``, the second stage with surrogates. The results folder is read when
     the report is written (a missing one is a note there, not an error here)."""
     spec = study.spec.agree_with
@@ -202,7 +205,7 @@ def agreement_for(result) -> dict[str, Any] | None:
     if spec is None:
         return None
     base = Path(result.study.source).resolve().parent if result.study.source else Path.cwd()
-    folder = base / spec.results
+    folder = (base / spec.results).resolve()
     ref = load_conclusions(folder, spec.screen, spec.stage)
     stages = {s.name: s for s in result.stages}
     missing = [n for n in (spec.screen, spec.stage) if n not in stages]

@@ -32,15 +32,12 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from ..errors import AnalysisError, SensfwError
-
-if TYPE_CHECKING:  # pragma: no cover
-    from ..study import Study
 
 COLUMNS = ("estimate", "se", "t", "p")
 
@@ -134,8 +131,9 @@ def load_reference(key: str, base: str | Path | None = None) -> Reference:
                      responses=responses, analogues=data.get("analogues", {}), path=str(res))
 
 
-def check_study(study: Study, problems: list[tuple[str, str]]) -> None:
-    """Problems of ``study``'s ``[compare_with]`` section, at their dotted paths."""
+def check_study(study, problems: list[tuple[str, str]]) -> None:
+    """Problems of ``study``'s ``[compare_with]`` section (``study``: a
+    :class:`~sensfw.study.Study` being validated), at their dotted paths."""
     spec = study.spec.compare_with
     where = "compare_with"
     try:

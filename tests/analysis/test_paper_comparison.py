@@ -154,39 +154,38 @@ def test_the_clutch_damping_cannot_act_at_table_2_medium_values():
     assert "6e-6 of the damping coefficient" in claim
 
 
-def problems(data) -> dict[str, str]:
-    with pytest.raises(StudyError) as info:
-        Study.from_dict(data, str(ROOT / "studies" / "x.toml"))
-    return dict(info.value.problems)
+def with_compare(**changes):
+    """paper_table2.toml with ``[compare_with]`` entries changed (None deletes one)."""
+    data = copy.deepcopy(STUDY)
+    for path, value in changes.items():
+        *parents, leaf = path.split("__")
+        node = data["compare_with"]
+        for part in parents:
+            node = node[part]
+        if value is None:
+            del node[leaf]
+        else:
+            node[leaf] = value
+    return data
 
 
-def test_compare_with_is_validated_with_the_study_file():
+@pytest.mark.parametrize("changes,where,message", [
+    ({"reference": "steinbach2024"}, "reference", "available: steinbach2025"),
+    ({"reference": "mine.toml"}, "reference", "not found"),
+    ({"stage": "screen"}, "stage", "no stage named 'screen'"),
+    ({"factors__x4": None}, "factors", "map x4 to design variables"),
+    ({"factors__x9": "slide_stiffness"}, "factors.x9", "has no factor 'x9'"),
+    ({"factors__x1": "slide_exponent"}, "factors.x1",
+     "'slide_exponent' is not a variable of stage 'doe'"),
+    ({"responses__thd": "THDX"}, "responses.thd", "no scorer labelled 'THDX'"),
+    ({"responses__sound": "P1"}, "responses.sound", "has no response 'sound'"),
+    ({"colour": "red"}, "colour", "Extra inputs are not permitted"),
+])
+def test_compare_with_is_validated_with_the_study_file(changes, where, message):
     assert Study.load(ROOT / "studies" / "paper_table2.toml").spec.compare_with.stage == "doe"
-    data = copy.deepcopy(STUDY)
-    data["compare_with"]["reference"] = "steinbach2024"
-    assert "available: steinbach2025" in problems(data)["compare_with.reference"]
-    data = copy.deepcopy(STUDY)
-    data["compare_with"]["stage"] = "screen"
-    assert "no stage named 'screen'" in problems(data)["compare_with.stage"]
-    data = copy.deepcopy(STUDY)
-    cw = data["compare_with"]
-    del cw["factors"]["x4"]
-    cw["factors"]["x9"] = "slide_stiffness"
-    cw["factors"]["x1"] = "slide_exponent"
-    cw["responses"]["thd"] = "THDX"
-    cw["responses"]["sound"] = "P1"
-    got = problems(data)
-    assert "map x4 to design variables" in got["compare_with.factors"]
-    assert "has no factor 'x9'" in got["compare_with.factors.x9"]
-    assert "'slide_exponent' is not a variable of stage 'doe'" in got["compare_with.factors.x1"]
-    assert "no scorer labelled 'THDX'" in got["compare_with.responses.thd"]
-    assert "has no response 'sound'" in got["compare_with.responses.sound"]
-    data = copy.deepcopy(STUDY)
-    data["compare_with"]["reference"] = "mine.toml"
-    assert "not found" in problems(data)["compare_with.reference"]
-    data = copy.deepcopy(STUDY)
-    data["compare_with"]["colour"] = "red"
-    assert "compare_with.colour" in problems(data)
+    with pytest.raises(StudyError) as info:
+        Study.from_dict(with_compare(**changes), str(ROOT / "studies" / "x.toml"))
+    assert message in dict(info.value.problems)[f"compare_with.{where}"]
 
 
 REFERENCE = """
@@ -197,18 +196,8 @@ model = "y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3 + noise"
 [doe]
 source = "Table 1"
 factors = ["x1", "x2", "x3"]
-[doe.x1]
-name = "first"
-unit = ""
-levels = [-1.0, 0.0, 1.0]
-[doe.x2]
-name = "second"
-unit = ""
-levels = [-1.0, 0.0, 1.0]
-[doe.x3]
-name = "third"
-unit = ""
-levels = [-1.0, 0.0, 1.0]
+""" + "".join(f'[doe.x{i}]\nname = "factor {i}"\nunit = ""\nlevels = [-1.0, 0.0, 1.0]\n'
+              for i in (1, 2, 3)) + """
 [responses.y]
 name = "the response"
 r2_adj = 0.99
@@ -223,26 +212,15 @@ t = [10.0, 10.0, -20.0, 0.0, 0.0, 5.0, 0.0, 15.0, 0.0, 4.0]
 p = [1e-9, 1e-9, 1e-12, 1.0, 1.0, 1e-4, 1.0, 1e-10, 1.0, 1e-3]
 """
 
-TOY = """
-[study]
-name = "toy"
-seed = 3
-[model]
-name = "sensfw_test_models:NoisyQuadratic"
-options = { noise = 0.05 }
-[execution]
-backend = "serial"
-[[stages]]
-name = "doe"
-design = "full_factorial"
-scorers = [{ name = "value", label = "Y" }]
-surrogates = ["eq18"]
-[compare_with]
-reference = "toy.toml"
-stage = "doe"
-factors = { x1 = "x1", x2 = "x2", x3 = "x3" }
-responses = { y = "Y" }
-"""
+TOY = {
+    "study": {"name": "toy", "seed": 3},
+    "model": {"name": "sensfw_test_models:NoisyQuadratic", "options": {"noise": 0.05}},
+    "execution": {"backend": "serial"},
+    "stages": [{"name": "doe", "design": "full_factorial", "surrogates": ["eq18"],
+                "scorers": [{"name": "value", "label": "Y"}]}],
+    "compare_with": {"reference": "toy.toml", "stage": "doe", "responses": {"y": "Y"},
+                     "factors": {"x1": "x1", "x2": "x2", "x3": "x3"}},
+}
 
 
 def test_a_study_report_sets_its_stage_beside_the_reference(tmp_path):
@@ -251,8 +229,7 @@ def test_a_study_report_sets_its_stage_beside_the_reference(tmp_path):
     from sensfw.runs import Runner, RunStore
 
     (tmp_path / "toy.toml").write_text(REFERENCE)
-    (tmp_path / "s.toml").write_text(TOY)
-    study = Study.load(tmp_path / "s.toml")  # the reference path is the study file's
+    study = Study.from_dict(TOY, str(tmp_path / "s.toml"))  # the path is the study file's
     with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
         result = run_study(study, runner)
     html = write_study_report(result, tmp_path / "report.html").read_text()
