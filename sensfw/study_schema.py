@@ -171,10 +171,10 @@ class CompareSection(_Strict):
 
 
 class AgreeSection(_Strict):
-    """A finished run of a fuller pipeline on the same model (its output folder, relative to
-    the study file) whose conclusions the report checks this study against
-    (:mod:`sensfw.analysis.agreement`): the selection of stage ``screen`` and the second
-    stage ``stage``, named alike in both studies."""
+    """A finished run of a fuller pipeline on the same model (its output folder: absolute,
+    relative to the study file, or else to the working folder) whose conclusions the report
+    checks this study against (:mod:`sensfw.analysis.agreement`): the selection of stage
+    ``screen`` and the second stage ``stage``, named alike in both studies."""
 
     results: str
     screen: str = "screen"

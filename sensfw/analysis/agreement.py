@@ -204,8 +204,9 @@ def agreement_for(result) -> dict[str, Any] | None:
     spec = result.study.spec.agree_with
     if spec is None:
         return None
-    base = Path(result.study.source).resolve().parent if result.study.source else Path.cwd()
-    folder = (base / spec.results).resolve()
+    from .paper_comparison import study_path
+
+    folder = study_path(spec.results, result.study)
     ref = load_conclusions(folder, spec.screen, spec.stage)
     stages = {s.name: s for s in result.stages}
     missing = [n for n in (spec.screen, spec.stage) if n not in stages]

@@ -6,7 +6,7 @@ its text calls significant and its coefficient table (Fig. 10b), each with its s
 asks for the comparison in its ``[compare_with]`` section (reference, stage, the reference's
 factors -> the stage's design variables, its responses -> the stage's scorer labels), which
 :func:`check_study` validates with the rest of the study file. ``reference`` is the key of a
-shipped file or the path of one in the same format (relative to the study file).
+shipped file or the path of one in the same format (:func:`study_path`).
 
 Each score of the stage is fitted twice beside the paper's table:
 
@@ -91,15 +91,26 @@ def available_references() -> list[str]:
     return sorted(p.name[:-5] for p in _data_dir().iterdir() if p.name.endswith(".toml"))
 
 
-def _source(study) -> Path:
-    return Path(study.source).resolve().parent if study.source else Path.cwd()
+def study_path(path: str | Path, study) -> Path:
+    """A path a study file names: absolute, or relative to the study file's folder, or, where
+    nothing is there, to the working folder (a report rebuilt from an output folder reads the
+    study file's copy there; ``--out`` folders are relative to the working folder)."""
+    path = Path(path)
+    if path.is_absolute():
+        return path
+    if study.source:
+        near = Path(study.source).resolve().parent / path
+        if near.exists():
+            return near
+    return (Path.cwd() / path).resolve()
 
 
-def load_reference(key: str, base: str | Path | None = None) -> Reference:
+def load_reference(key: str, study=None) -> Reference:
     """The reference ``key`` (``sensfw/data/<key>.toml``), or the data file at the path
-    ``key`` (ending in ``.toml``; relative to ``base``, default the working folder)."""
+    ``key`` (ending in ``.toml``; relative as :func:`study_path` says for ``study``, else to
+    the working folder)."""
     if key.endswith(".toml"):
-        res = Path(base or ".") / key
+        res = study_path(key, study) if study is not None else Path(key)
         if not res.is_file():
             raise UnknownReferenceError(f"reference file {str(res)!r} not found")
     else:
@@ -137,7 +148,7 @@ def check_study(study, problems: list[tuple[str, str]]) -> None:
     spec = study.spec.compare_with
     where = "compare_with"
     try:
-        ref = load_reference(spec.reference, _source(study))
+        ref = load_reference(spec.reference, study)
     except SensfwError as err:
         problems.append((f"{where}.reference", str(err)))
         return
@@ -465,7 +476,7 @@ def comparison_for(result) -> Comparison | None:
     stage = next((s for s in result.stages if s.name == spec.stage), None)
     if stage is None:
         raise AnalysisError(f"compare_with.stage: stage {spec.stage!r} did not run")
-    ref = load_reference(spec.reference, _source(result.study))
+    ref = load_reference(spec.reference, result.study)
     missing = [v for v in spec.factors.values() if v not in stage.space.names]
     if missing:
         raise AnalysisError(f"compare_with.factors: {', '.join(missing)} are not variables of "

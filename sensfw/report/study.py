@@ -399,9 +399,11 @@ def write_study_report(result, path: str | Path) -> Path:
             for label, per in stage.validation.items():
                 page.h3(f"{label}: surrogates side by side (same {stage.table.shape[0]} runs)")
                 frame, dropped = drop_empty_columns(validation_table(per))
-                page.table(frame)
+                page.table(frame.astype(object).where(frame.notna(), "n/a"))
                 page.p("R²adj and Q² on the scale of the score; Q² from leave-one-out and "
-                       "5-fold refits; confirmation = new runs inside the bounds.", "meta")
+                       "5-fold refits; confirmation = new runs inside the bounds; n/a: the "
+                       "surrogate has no such number (no parametric form for R²adj, a run of "
+                       "leverage 1 for Q² LOO).", "meta")
                 for line in dropped:
                     page.p(line, "meta")
                 for name in per:

@@ -88,6 +88,7 @@ surrogates = ["eq18"]
 """
 
 
+@pytest.mark.slow  # two studies (a few hundred function runs) and their HTML reports
 def test_a_study_report_measures_its_agreement_with_a_finished_pipeline(tmp_path):
     from sensfw.pipeline import results_json, run_study
     from sensfw.report.study import write_study_report

@@ -223,6 +223,7 @@ TOY = {
 }
 
 
+@pytest.mark.slow  # a study of 27 function runs and its HTML report
 def test_a_study_report_sets_its_stage_beside_the_reference(tmp_path):
     from sensfw.pipeline import run_study
     from sensfw.report.study import write_study_report

@@ -86,10 +86,11 @@ def test_uncertainty_sampling_picks_the_candidate_farthest_from_the_runs():
     y = pd.DataFrame({"a": np.sin(3 * runs["x"]), "b": 10 + 100 * runs["x"] ** 2})
     # runs bunched at one end: a stationary GP is least certain at the other end, and
     # (noise-free) certain at a run
-    u = uncertainty(runs, y, grid, bounds=[(-1, 1)], options={"noise": False})
+    fast = {"noise": False, "n_restarts_optimizer": 0}
+    u = uncertainty(runs, y, grid, bounds=[(-1, 1)], options=fast)
     assert u.idxmax() == "g8" and u["g0"] < 1e-3 * u["g8"]
     assert np.all(np.diff(u.to_numpy()[2:]) > 0)  # grows with the distance from the runs
-    nxt = propose(runs, y, grid, n=1, bounds=[(-1, 1)], options={"noise": False})
+    nxt = propose(runs, y, grid, n=1, bounds=[(-1, 1)], options=fast)
     assert list(nxt.index) == ["g8"]
     # a candidate already run (g0 = -1) is never proposed again
-    assert set(propose(runs, y, grid, n=20).index) == set(grid.index) - {"g0"}
+    assert set(propose(runs, y, grid, n=20, options=fast).index) == set(grid.index) - {"g0"}
