@@ -5,6 +5,7 @@ import copy
 import itertools
 import json
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -132,3 +133,11 @@ def test_agree_with_is_validated_with_the_study_file(tmp_path):
     got = dict(info.value.problems)
     assert got["agree_with.screen"] == "stage 'doe' has no select"
     assert "no stage named 'nope'" in got["agree_with.stage"]
+
+
+def test_the_shipped_fast_study_is_the_paper_screen_and_a_27_run_fraction():
+    from sensfw.pipeline import plan
+
+    study = Study.load(Path(__file__).resolve().parents[2] / "studies" / "paper_fast.toml")
+    assert [p["n_runs"] for p in plan(study)] == [39, 27]  # 66 runs; the paper's: 39 + 81
+    assert study.spec.agree_with.results == "out/paper"
