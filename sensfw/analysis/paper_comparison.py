@@ -13,8 +13,8 @@ Each score of the stage is fitted twice beside the paper's table:
 * **sensfw**: Eq. 18 as the study fits it (:class:`~sensfw.surrogates.eq18.Eq18`: coded
   variables, with an intercept; coefficients mapped to physical units);
 * **as Fig. 10b**: the same model fitted the way the paper's table was, least squares on the
-  physical values with the columns that a pivoted-QR rank check keeps (MATLAB's rule:
-  ``|R_kk| > max(n, p) eps(|R_11|)``; :func:`fit_as_published`). On Table 2's values the
+  physical values with the columns that a pivoted-QR rank check keeps (a MATLAB-style
+  rule, ``|R_kk| > max(n, p) eps(|R_11|)``; :func:`fit_as_published`). On Table 2's values the
   ``x2^2`` column is about 1e13 and the rank check drops the intercept, whose R diagonal is
   0.04 against a tolerance of 1.3: Fig. 10b prints the intercept as estimate 0, SE 0 and
   t NaN, the way MATLAB reports a coefficient it dropped. Without an intercept the terms of
@@ -192,7 +192,7 @@ def check_study(study, problems: list[tuple[str, str]]) -> None:
 # ---- fits -------------------------------------------------------------------------------------
 def fit_as_published(X: np.ndarray, y: np.ndarray, names: list[str]) -> dict[str, Any]:
     """Eq. 18 (products) by least squares on the physical values, keeping the columns a
-    pivoted QR declares independent (``|R_kk| > max(n, p) eps(|R_11|)``, MATLAB's rank rule);
+    pivoted QR declares independent (``|R_kk| > max(n, p) eps(|R_11|)``, a MATLAB-style rule);
     dropped coefficients are reported as MATLAB does: estimate 0, SE 0, t and p NaN.
     R^2 and R^2adj are about the mean with the kept columns as the model's degrees of
     freedom."""
