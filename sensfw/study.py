@@ -43,7 +43,9 @@ from .models.base import IMPLICIT_METHODS, Model, SolverSettings
 from .models.stepsize import CALIBRATED_METHODS
 from .params import DesignSpace, Parameter, ParameterSet
 from .study_schema import (  # noqa: F401  (re-exported: the schema's names)
+    AgreeSection,
     CalibrationSection,
+    CompareSection,
     ExcitationSection,
     ExecutionSection,
     GainSection,
@@ -128,6 +130,7 @@ class Study:
         self.stage_bounds = {}
         self._check_stages(problems)
         self.calibration_bounds = self._check_calibration(problems)
+        self._check_comparison(problems)
         if problems:
             raise StudyError(problems, source)
 
@@ -383,6 +386,19 @@ class Study:
         ``[calibration]`` bounds."""
         return DesignSpace.from_parameters(self.parameters, self.groups, select=variables,
                                            bounds=self.calibration_bounds)
+
+    def _check_comparison(self, problems) -> None:
+        """``[compare_with]``: the reference exists and maps onto a stage's variables and
+        scorers (:func:`sensfw.analysis.paper_comparison.check_study`); ``[agree_with]``:
+        its stages exist here (:func:`sensfw.analysis.agreement.check_study`)."""
+        if self.spec.compare_with is not None:
+            from .analysis.paper_comparison import check_study
+
+            check_study(self, problems)
+        if self.spec.agree_with is not None:
+            from .analysis.agreement import check_study as check_agreement
+
+            check_agreement(self, problems)
 
     # ---- use ---------------------------------------------------------------------------------
     @property

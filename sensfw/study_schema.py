@@ -158,6 +158,29 @@ class CalibrationSection(_Strict):
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
 
 
+class CompareSection(_Strict):
+    """A published study to set a stage's Eq. 18 results beside (the report's comparison
+    section): ``reference`` names a data file of :mod:`sensfw.analysis.paper_comparison`,
+    ``factors`` maps the reference's factors to the stage's design variables and
+    ``responses`` its responses to the stage's scorer labels."""
+
+    reference: str
+    stage: str
+    factors: dict[str, str] = Field(default_factory=dict)
+    responses: dict[str, str] = Field(default_factory=dict)
+
+
+class AgreeSection(_Strict):
+    """A finished run of a fuller pipeline on the same model (its output folder: absolute,
+    relative to the study file, or else to the working folder) whose conclusions the report
+    checks this study against (:mod:`sensfw.analysis.agreement`): the selection of stage
+    ``screen`` and the second stage ``stage``, named alike in both studies."""
+
+    results: str
+    screen: str = "screen"
+    stage: str = "doe"
+
+
 class StudyFile(_Strict):
     study: StudyInfo
     model: ModelSection = Field(default_factory=ModelSection)
@@ -168,3 +191,5 @@ class StudyFile(_Strict):
     groups: dict[str, list[str]] | None = None  # None: the model's default grouping
     stages: list[StageSpec] = Field(min_length=1)
     calibration: CalibrationSection | None = None
+    compare_with: CompareSection | None = None
+    agree_with: AgreeSection | None = None

@@ -184,7 +184,7 @@ def test_plugin_options_are_checked_before_anything_runs():
                                        {"name": "gaussian_process", "noise": "yes",
                                         "n_restarts_optimizer": -1}]
     got = problems(data)
-    assert got["stages[1].design_options.levelz"] == "unknown option; known: levels"
+    assert got["stages[1].design_options.levelz"] == "unknown option; known: centre, levels"
     assert "fmin < fmax" in got["stages[0].scorers[0].band"]
     assert "unit must be 'percent' or 'dBc'" in got["stages[1].scorers[2].unit"]
     assert "'product'" in got["stages[1].surrogates[0].interaction"]
@@ -231,7 +231,7 @@ def test_cli_validate_reports_bad_options(tmp_path):
                           capture_output=True, text=True, timeout=120,
                           env={**os.environ, "COLUMNS": "200"})
     assert proc.returncode == 2
-    assert "stages[1].design_options.levelz: unknown option; known: levels" in proc.stderr
+    assert "stages[1].design_options.levelz: unknown option; known: centre, levels" in proc.stderr
     assert "stages[1].surrogates[0].interaction" in proc.stderr
     assert "Traceback" not in proc.stderr
 

@@ -82,8 +82,8 @@ def run(
         for label, per in st.get("validation", {}).items():
             for name, v in per.items():
                 adj = "n/a" if v.get("r2_adj") is None else f"{v['r2_adj']:.3f}"
-                out.print(f"  {st['name']}: {label} / {name}: R2adj={adj} "
-                          f"Q2(LOO)={v['q2_loo']:.3f}")
+                q2 = "n/a" if v.get("q2_loo") is None else f"{v['q2_loo']:.3f}"
+                out.print(f"  {st['name']}: {label} / {name}: R2adj={adj} Q2(LOO)={q2}")
 
 
 def _keep_study_file(study_file: Path, out_dir: Path) -> None:
