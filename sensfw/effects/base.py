@@ -99,6 +99,20 @@ def decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
     return [{**nominal, name: top * f} for f in fractions]
 
 
+def add_spring_along_normal(hooks, place, name: str, force) -> None:
+    """A force element at a body ``place``, along its normal, measured from the static state
+    (it carries no static load): ``force(ops, e, e_dot)`` of the displacement ``e`` (m) and
+    velocity ``e_dot`` of the body point along the normal from where it rests (N)."""
+    nx, ny = place.normal
+
+    def law(ops, u, v):
+        f = force(ops, u[0] * nx + u[1] * ny, v[0] * nx + v[1] * ny)
+        return f * nx, f * ny
+
+    hooks.add_force(name, place.body0 or hooks.ground, place.r0, place.body1, place.r1, law,
+                    about_static=True)
+
+
 def make_effect(spec) -> Effect:
     """An effect from its spec: a name, ``{"name": ..., "attach": ...}`` or an Effect."""
     from ..errors import SensfwError

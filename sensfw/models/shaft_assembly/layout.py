@@ -29,12 +29,12 @@ import math
 from collections.abc import Mapping
 
 from ...errors import ParameterError
+from ...params import MM
 from ..contact import Friction, PenaltyLaw, stiffness_si
 from ..places import Place
 from ..planar import Body, Link, Mechanism, plus
 from .table1 import Geometry
 
-MM = 1e-3  # m per mm
 HOUSING = "H"  # ground
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from ...errors import DivergenceError, SimulationError
 from ...excitation import Excitation
-from ...params import ParameterSet
+from ...params import MM, ParameterSet
 from ..base import Model, Signals, SolverSettings
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
@@ -36,8 +36,6 @@ from ..planar import exudyn as planar_exudyn
 from ..stepsize import StepChoice, choose_integration, first_order_eigenvalues, grid_step
 from . import layout as mechanics
 from .table1 import GROUPS, PARAMETERS, Geometry
-
-MM = mechanics.MM
 
 
 class ShaftAssembly(Model):
