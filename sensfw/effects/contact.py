@@ -29,7 +29,6 @@ class Clearance(Effect):
 
     name = "clearance"
     fits = ("contact", "joint")
-    preferred_places = ("clutch_drive",)
     signatures = ("harmonics (even and odd) that grow with excitation level",
                   "resonances that move with level: down while the contact opens, up once "
                   "the motion exceeds the gap")
@@ -58,7 +57,6 @@ class Friction(Effect):
 
     name = "friction"
     fits = ("contact",)
-    preferred_places = ("clutch_drive",)
     signatures = ("odd harmonics", "amplitude-dependent damping: peaks flatten and widen "
                   "with level", "resonances soften with level", "below the slip velocity "
                   "the regularised law is a viscous coupling: added damping and stiffness "
@@ -91,7 +89,6 @@ class ContactHardening(Effect):
 
     name = "contact_hardening"
     fits = ("contact",)
-    preferred_places = ("bearing_l1",)
     signatures = ("at a preloaded contact (one the static load keeps closed, as every "
                   "contact of the shaft model): the modes the contact carries shift at every "
                   "level (its tangent stiffness at the operating point changes) and even "

@@ -57,7 +57,6 @@ class MicroSlip(Effect):
     name = "micro_slip"
     fits = ("joint",)
     needs = ("add_jenkins",)
-    preferred_places = ("joint",)
     signatures = ("resonances move down as the level rises", "damping grows with level",
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
@@ -124,7 +123,6 @@ class CubicStiffness(Effect):
 
     name = "cubic_stiffness"
     fits = ("joint", "body")
-    preferred_places = ("joint", "crankshaft")
     signatures = ("resonances move up as the level rises", "odd harmonics")
     signature_classes = frozenset({"hardening"})
     neutral: ClassVar[dict[str, float]] = {"cubic_stiffness": 0.0}

@@ -181,14 +181,39 @@ def fitting_places(places: Mapping[str, Place], effect: EffectLike | type) -> li
     return [n for n, pl in places.items() if pl.kind in effect.fits and needs <= pl.offers]
 
 
-def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
-                   model: str) -> list[tuple[EffectLike, Place]]:
-    """Each effect with the place it attaches to.
+def make_effect(spec) -> EffectLike:
+    """An effect from its spec: a registered name, ``{"name": ..., "attach": ...}``, or an
+    effect object (returned as it is). Effects are found through the registry
+    (:data:`sensfw.plugins.effects`), so models never import them."""
+    from ..plugins import effects
 
-    ``attach`` must name a place of a kind the effect fits. Without ``attach``, the effect's
-    ``preferred_places`` that the model has come first, then the only fitting place; otherwise
-    the error lists the choices. Two effects that add the same parameter are refused.
+    if not isinstance(spec, (str, Mapping)):
+        return spec
+    if isinstance(spec, str):
+        spec = {"name": spec}
+    spec = dict(spec)
+    if "name" not in spec:
+        raise SensfwError(f"effect {spec!r} has no name")
+    cls = effects.get(spec.pop("name"))
+    unknown = set(spec) - {"attach"}
+    if unknown:
+        raise SensfwError(f"effect {cls.name!r}: unknown option(s) {', '.join(sorted(unknown))}"
+                          "; known: attach")
+    return cls(**spec)
+
+
+def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
+                   model: str, preferred: Mapping[str, Sequence[str]] | None = None
+                   ) -> list[tuple[EffectLike, Place]]:
+    """Each effect with the place it attaches to (its ``attach`` is set to that place).
+
+    ``attach`` must name a place of a kind the effect fits. Without ``attach``, the places
+    the model prefers for that effect (``preferred[effect.name]``, see
+    :attr:`sensfw.models.Model.preferred_places`) come first, then the only fitting place;
+    otherwise the error lists the choices. Two effects that add the same parameter are
+    refused.
     """
+    preferred = preferred or {}
     out, owners = [], {}
     for eff in effects:
         fits = fitting_places(places, eff)
@@ -203,9 +228,9 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
                               f"{', '.join(kinds) or '(none)'}")
         name = eff.attach
         if name is None:
-            preferred = [n for n in getattr(eff, "preferred_places", ()) if n in fits]
-            if preferred:
-                name = preferred[0]
+            first = [n for n in preferred.get(eff.name, ()) if n in fits]
+            if first:
+                name = first[0]
             elif len(fits) == 1:
                 name = fits[0]
             else:

@@ -49,7 +49,7 @@ from ...params import ParameterSet
 from ..base import Model, Signals, SolverSettings
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
-from ..places import Place, resolve_places
+from ..places import Place
 from ..stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
 from . import layout as mechanics
 from . import simulation
@@ -76,36 +76,33 @@ class BoltedBeam(Model):
     units: ClassVar[dict[str, str]] = {"Acc1": "m/s^2", "Acc2": "m/s^2", "Acc3": "m/s^2",
                                        "Acc4": "m/s^2", "Laser": "m/s"}
 
-    def __init__(self, geometry: Geometry | dict | None = None, effects: tuple = ()):
-        from ...effects import make_effect
+    #: where an effect goes without ``attach``: the joint's effects at the joint (the only
+    #: joint), dry friction at beam1 (the shaker's drive point)
+    preferred_places: ClassVar[dict[str, tuple[str, ...]]] = {
+        "cubic_stiffness": ("joint",), "dry_friction": ("beam1",)}
 
+    def __init__(self, geometry: Geometry | dict | None = None, effects: tuple = ()):
         if isinstance(geometry, dict):
             geometry = Geometry(**{k: tuple(v) if isinstance(v, list) else v
                                    for k, v in geometry.items()})
         self.geometry = geometry or Geometry()
-        self.effects = tuple(make_effect(e) for e in effects)
-        self._attached = resolve_places(self.places(), self.effects, self.name)
+        super().__init__(effects)
 
     # ---- declarations ------------------------------------------------------------------------
     def parameters(self) -> ParameterSet:
-        extra = [p for e in self.effects for p in e.parameters()]
-        return ParameterSet([*PARAMETERS.values(), *extra]) if extra else PARAMETERS
+        return self.with_effect_parameters(PARAMETERS)
 
     def places(self) -> dict[str, Place]:
         return mechanics.places(self.geometry)
 
     def options(self) -> dict:
-        opts: dict = {"geometry": asdict(self.geometry)}
-        if self.effects:
-            opts["effects"] = [e.spec() for e in self.effects]
-        return opts
+        return {"geometry": asdict(self.geometry), **self.effect_options()}
 
     # ---- mechanics ---------------------------------------------------------------------------
     def assembly(self, p: Mapping[str, float]) -> BeamAssembly:
         """The assembly for full parameter values ``p`` with every effect applied."""
         asm = mechanics.assembly(p, self.geometry)
-        for effect, place in self._attached:
-            effect.apply(place, asm, p)
+        self.apply_effects(asm, p)
         return asm
 
     def structure(self, p: Mapping[str, float], asm: BeamAssembly | None = None) -> Structure:

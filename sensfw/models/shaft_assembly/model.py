@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import asdict, replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -30,7 +31,7 @@ from ...params import MM, ParameterSet
 from ..base import Model, Signals, SolverSettings
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
-from ..places import Place, resolve_places
+from ..places import Place
 from ..planar import Contacts, Layout, Mechanism, statics
 from ..planar import exudyn as planar_exudyn
 from ..stepsize import StepChoice, choose_integration, first_order_eigenvalues, grid_step
@@ -56,19 +57,24 @@ class ShaftAssembly(Model):
     sensors = ("crank_axial", "crank_radial", "drive_axial", "drive_radial")
     default_output = "crank_axial"
 
+    #: where an effect goes without ``attach``: play and friction at the clutch's guide,
+    #: hardening at roller bearing L1, damping at L3, the body effects at the crankshaft
+    preferred_places: ClassVar[dict[str, tuple[str, ...]]] = {
+        "clearance": ("clutch_drive",), "friction": ("clutch_drive",),
+        "contact_hardening": ("bearing_l1",), "damping": ("bearing_l3",),
+        **dict.fromkeys(("preload", "added_mass", "flexible_mode", "limit_stop",
+                         "cubic_stiffness"), ("crankshaft",)),
+    }
+
     def __init__(self, linearised: bool = False, geometry: Geometry | None = None,
                  effects: tuple = ()):
-        from ...effects import make_effect
-
         self.linearised = bool(linearised)
         self.geometry = geometry or Geometry()
-        self.effects = tuple(make_effect(e) for e in effects)
-        self._attached = resolve_places(self.places(), self.effects, self.name)
+        super().__init__(effects)
 
     # ---- declarations ------------------------------------------------------------------------
     def parameters(self) -> ParameterSet:
-        extra = [p for e in self.effects for p in e.parameters()]
-        return ParameterSet([*PARAMETERS.values(), *extra]) if extra else PARAMETERS
+        return self.with_effect_parameters(PARAMETERS)
 
     def groups(self) -> dict[str, tuple[str, ...]]:
         return dict(GROUPS)
@@ -77,17 +83,14 @@ class ShaftAssembly(Model):
         return mechanics.places(self.geometry)
 
     def options(self) -> dict:
-        opts: dict = {"linearised": self.linearised, "geometry": asdict(self.geometry)}
-        if self.effects:
-            opts["effects"] = [e.spec() for e in self.effects]
-        return opts
+        return {"linearised": self.linearised, "geometry": asdict(self.geometry),
+                **self.effect_options()}
 
     # ---- mechanics ---------------------------------------------------------------------------
     def mechanism(self, p: Mapping[str, float]) -> Mechanism:
         """The assembly for full parameter values ``p`` with every effect applied."""
         mech = mechanics.mechanism(p, self.geometry)
-        for effect, place in self._attached:
-            effect.apply(place, mech, p)
+        self.apply_effects(mech, p)
         return mech
 
     def layout(self, p: Mapping[str, float]) -> Layout:
