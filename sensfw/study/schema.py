@@ -8,7 +8,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from .models.stepsize import DEFAULT_TOLERANCE
+from ..models.stepsize import DEFAULT_TOLERANCE
 
 Quantity = str | float | int
 
