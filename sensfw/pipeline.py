@@ -93,12 +93,12 @@ def _jsonable(x):
     return x
 
 
-def _init_params(name: str) -> set[str]:
-    import inspect
-
+def _declared_options(name: str) -> set[str]:
+    """The options surrogate ``name`` declares (:func:`sensfw.options.options_model`)."""
+    from .options import options_model
     from .plugins import surrogates
 
-    return set(inspect.signature(surrogates.get(name)).parameters)
+    return set(options_model(surrogates.get(name)).model_fields)
 
 
 def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd.DataFrame,
@@ -120,7 +120,7 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
         result.validation[label] = {}
         for sur in stage.surrogates:
             name, opts = sur.key, sur.options()
-            if "bounds" in _init_params(sur.name) and "bounds" not in opts:
+            if "bounds" in _declared_options(sur.name) and "bounds" not in opts:
                 opts["bounds"] = [bounds[n] for n in space.names]
             try:
                 est = make_surrogate(sur.name, **opts).fit(X, y[ok])

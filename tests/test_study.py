@@ -90,13 +90,22 @@ def test_stage_references_and_channels_are_checked():
     assert "unknown design variable 'slide_dampin'" in got["stages[0].variables"]
 
 
-def test_unknown_effect_in_model_options():
+def test_model_options_and_effects_are_reported_at_their_paths():
+    """Every problem of the model's options at once, each effect's at its index."""
     data = copy.deepcopy(QUICK)
-    data["model"]["options"] = {"effects": [{"name": "flexible_mood"}]}
+    data["model"]["options"] = {"effects": [{"name": "flexible_mood"}, "added_mass",
+                                            {"name": "clearance", "attach": "moon"},
+                                            {"name": "damping", "at": "bearing_l1"}],
+                                "linearised": "no"}
     got = problems(data)
-    assert "unknown effect 'flexible_mood'; available:" in got["model.options"]
-    data["model"]["options"] = {"effects": [{"name": "clearance", "attach": "moon"}]}
-    assert "cannot attach to 'moon'" in problems(data)["model.options"]
+    assert "unknown effect 'flexible_mood'; available:" in got["model.options.effects[0].name"]
+    assert "cannot attach to 'moon'" in got["model.options.effects[2].attach"]
+    assert got["model.options.effects[3].at"] == "unknown option; known: attach"
+    assert got["model.options.linearised"] == "linearised must be true or false, got 'no'"
+    assert "model.options.effects[1].attach" not in got  # the model's preferred place
+    data["model"]["options"] = {"colour": "red"}
+    assert problems(data) == {"model.options.colour":
+                              "unknown option; known: effects, geometry, linearised"}
 
 
 def test_automatic_step_only_with_the_integrators_it_is_calibrated_for():
@@ -189,8 +198,9 @@ def test_plugin_options_are_checked_before_anything_runs():
     assert "unit must be 'percent' or 'dBc'" in got["stages[1].scorers[2].unit"]
     assert "'product'" in got["stages[1].surrogates[0].interaction"]
     assert "'bogus'" in got["stages[1].surrogates[0].interaction"]
-    assert "bool" in got["stages[1].surrogates[1].noise"]
-    assert "range [0, inf)" in got["stages[1].surrogates[1].n_restarts_optimizer"]
+    assert got["stages[1].surrogates[1].noise"] == "noise must be true or false, got 'yes'"
+    assert got["stages[1].surrogates[1].n_restarts_optimizer"] == \
+        "n_restarts_optimizer must be an integer >= 0, got -1"
     assert len(got) == 6
 
 
@@ -211,8 +221,8 @@ def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space()
     data["stages"][0]["design_options"] = {"trajectories": 3, "optimal_trajectories": 5}
     data["stages"][1]["surrogates"] = [{"name": "eq18", "interaction": "ratio"}]
     got = problems(data)
-    assert "optimal_trajectories must be an integer in [2, trajectories)" in \
-        got["stages[0].design_options"]
+    assert got["stages[0].design_options.optimal_trajectories"] == \
+        "optimal_trajectories must be an integer in [2, trajectories) = [2, 3), got 5"
     assert "coding='physical'" in got["stages[1].surrogates[0].interaction"]
     data = copy.deepcopy(QUICK)
     data["stages"][0]["design"] = "box_behnken"

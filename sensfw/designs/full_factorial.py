@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import itertools
-from typing import ClassVar
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
+from ..options import Int, PluginOptions
 from ..params import DesignSpace
 from ..plugins import designs
 from .base import Design, DesignError, ScreeningResult, responses
@@ -24,14 +26,11 @@ class FullFactorial(Design):
     """
 
     name = "full_factorial"
-    defaults: ClassVar[dict] = {"levels": 3}
 
-    def validate(self):
-        lv = self.options["levels"]
-        items = lv if isinstance(lv, (list, tuple)) else [lv]
-        if not items or any(not isinstance(n, int) or n < 2 for n in items):
-            raise DesignError("design 'full_factorial': levels must be an integer >= 2 or a "
-                              f"list of them, got {lv!r}")
+    class Options(PluginOptions):
+        levels: Annotated[Int, Field(ge=2)] | Annotated[
+            list[Annotated[Int, Field(ge=2)]], Field(min_length=1)] = Field(
+            3, description="an integer >= 2 or a list of them (one per variable)")
 
     def _levels(self, space: DesignSpace) -> list[int]:
         lv = self.options["levels"]

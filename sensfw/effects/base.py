@@ -16,7 +16,10 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import ClassVar
 
+from pydantic import Field
+
 from ..models.places import Hooks, Place, make_effect  # noqa: F401  (re-exported)
+from ..options import PluginOptions, Str
 from ..params import Parameter
 
 #: Amplitude-dependence classes of a nonlinear structure's response (Kerschen, Worden,
@@ -49,6 +52,13 @@ class Effect(ABC):
     #: parameter values at which the effect vanishes exactly (the model without it): a
     #: calibration that starts there can only end better than the model without the effect
     neutral: ClassVar[dict[str, float]] = {}
+
+    class Options(PluginOptions):
+        """An effect's one option, where it attaches (:mod:`sensfw.options`)."""
+
+        attach: Str | None = Field(
+            None, description="a place of the model (`sensfw places MODEL`) or none (the "
+                              "place the model prefers for the effect)")
 
     def __init__(self, attach: str | None = None):
         self.attach = attach

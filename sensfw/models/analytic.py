@@ -17,8 +17,10 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
+from pydantic import Field
 
 from ..excitation import Chirp
+from ..options import Float, PluginOptions
 from ..params import Parameter, ParameterSet
 from ..plugins import models
 from .base import Model, Signals
@@ -38,6 +40,10 @@ class Ishigami(Model):
     version = "1"
     sensors = ("y",)
     default_output = "y"
+
+    class Options(PluginOptions):
+        a: Float = Field(7.0, description="a number")
+        b: Float = Field(0.1, description="a number")
 
     def __init__(self, a: float = 7.0, b: float = 0.1):
         self.a, self.b = float(a), float(b)
@@ -63,6 +69,9 @@ class TwoDOF(Model):
     version = "1"
     sensors = ("a1", "a2")
     default_output = "a1"
+
+    class Options(PluginOptions):
+        """None: the chain is fixed, and it has no places for effects."""
 
     def parameters(self) -> ParameterSet:
         P = Parameter

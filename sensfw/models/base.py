@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import SignalError
 from ..excitation import Excitation
 from ..params import ParameterSet
-from .places import Hooks, Place, make_effect, resolve_places
+from .places import Hooks, Place, attach_effects
 from .stepsize import DEFAULT_TOLERANCE, STIFF_METHOD
 
 
@@ -80,6 +80,10 @@ class Signals:
                    channels=channels, fs=float(arrays["fs"]), f_inst=f_inst, sweep_end=end,
                    **kw)
 
+
+#: the description of a model's ``effects`` option (:mod:`sensfw.options`)
+EFFECTS = ("a list of effects: registered names or {name, attach} tables "
+           "(`sensfw places MODEL` lists where each fits)")
 
 #: Exudyn's implicit integrators (unconditionally stable; the step is chosen for accuracy)
 IMPLICIT_METHODS = ("GeneralizedAlpha", "TrapezoidalIndex2")
@@ -151,10 +155,10 @@ class Model(ABC):
     def __init__(self, effects: Sequence = ()):
         """Resolve ``effects`` (registered names, ``{"name": ..., "attach": ...}`` specs or
         :class:`sensfw.effects.Effect` objects) against the model's places
-        (:func:`~sensfw.models.places.resolve_places`)."""
-        self.effects = tuple(make_effect(e) for e in effects)
-        self.attached = tuple(resolve_places(self.places(), self.effects, self.name,
-                                             self.preferred_places))
+        (:func:`~sensfw.models.places.attach_effects`: every problem at its path,
+        ``effects[1].attach``, in one :class:`~sensfw.errors.OptionError`)."""
+        self.effects, self.attached = attach_effects(self.places(), effects, self.name,
+                                                     self.preferred_places)
 
     @abstractmethod
     def parameters(self) -> ParameterSet: ...

@@ -38,7 +38,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
-from ..errors import SensfwError
+from ..errors import OptionError, UnknownPluginError
+from ..options import describe
 
 Expr = Any  # an exudyn.symbolic.Real expression, or a float/array for numpy evaluation
 Point = tuple[float, float]
@@ -184,22 +185,73 @@ def fitting_places(places: Mapping[str, Place], effect: EffectLike | type) -> li
 def make_effect(spec) -> EffectLike:
     """An effect from its spec: a registered name, ``{"name": ..., "attach": ...}``, or an
     effect object (returned as it is). Effects are found through the registry
-    (:data:`sensfw.plugins.effects`), so models never import them."""
+    (:data:`sensfw.plugins.effects`), so models never import them; their options are checked
+    by the contract of every plugin kind (:func:`sensfw.options.make`)."""
+    from ..options import make
     from ..plugins import effects
 
     if not isinstance(spec, (str, Mapping)):
         return spec
-    if isinstance(spec, str):
-        spec = {"name": spec}
-    spec = dict(spec)
-    if "name" not in spec:
-        raise SensfwError(f"effect {spec!r} has no name")
-    cls = effects.get(spec.pop("name"))
-    unknown = set(spec) - {"attach"}
-    if unknown:
-        raise SensfwError(f"effect {cls.name!r}: unknown option(s) {', '.join(sorted(unknown))}"
-                          "; known: attach")
-    return cls(**spec)
+    spec = {"name": spec} if isinstance(spec, str) else dict(spec)
+    name = spec.pop("name", None)
+    if not isinstance(name, str):
+        raise OptionError(f"effect {spec!r} has no name (a registered effect)", option="name")
+    return make(effects, name, spec)
+
+
+def _resolve(places: Mapping[str, Place], effects: Sequence[EffectLike], model: str,
+             preferred: Mapping[str, Sequence[str]], index: Sequence[int] | None = None
+             ) -> tuple[list, list[tuple[str, str]]]:
+    """``(attached, problems)``: each effect that fits with its place, and every problem as
+    ``(path, message)`` with the path of the effect (``effects[1].attach``; ``index``: the
+    position of each effect in the model's list, default its position in ``effects``)."""
+    out, owners, problems = [], {}, []
+    for k, eff in enumerate(effects):
+        i = k if index is None else index[k]
+        fits = fitting_places(places, eff)
+        needs = tuple(getattr(eff, "needs", ()))
+        if not fits:
+            kinds = sorted({pl.kind for pl in places.values()})
+            if any(pl.kind in eff.fits for pl in places.values()):
+                problems.append((f"effects[{i}].name", f"effect {eff.name!r} needs the hook(s) "
+                                 f"{', '.join(needs)}, which no place of model {model!r} "
+                                 "offers"))
+            else:
+                problems.append((f"effects[{i}].name", f"effect {eff.name!r} fits places of "
+                                 f"kind {', '.join(eff.fits)}; model {model!r} has places of "
+                                 f"kind {', '.join(kinds) or '(none)'}"))
+            continue
+        name = eff.attach
+        if name is None:
+            first = [n for n in preferred.get(eff.name, ()) if n in fits]
+            if first:
+                name = first[0]
+            elif len(fits) == 1:
+                name = fits[0]
+            else:
+                problems.append((f"effects[{i}].attach", f"effect {eff.name!r}: say where "
+                                 f"(attach = ...); it fits {', '.join(fits)} of model "
+                                 f"{model!r}"))
+                continue
+        elif name not in fits:
+            if name not in places:
+                what = f"model {model!r} has no place {name!r}"
+            elif places[name].kind not in eff.fits:
+                what = f"{name!r} is a {places[name].kind}"
+            else:
+                what = f"{name!r} does not offer {', '.join(needs)}"
+            problems.append((f"effects[{i}].attach", f"effect {eff.name!r} cannot attach to "
+                             f"{name!r} ({what}); it fits {', '.join(fits)}"))
+            continue
+        eff.attach = name
+        clash = [p.name for p in eff.parameters() if p.name in owners]
+        if clash:
+            problems.append((f"effects[{i}]", f"effects {owners[clash[0]]!r} and "
+                             f"{eff.name!r}@{name} both add parameter {clash[0]!r}"))
+            continue
+        owners.update({p.name: f"{eff.name}@{name}" for p in eff.parameters()})
+        out.append((eff, places[name]))
+    return out, problems
 
 
 def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
@@ -211,45 +263,35 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
     the model prefers for that effect (``preferred[effect.name]``, see
     :attr:`sensfw.models.Model.preferred_places`) come first, then the only fitting place;
     otherwise the error lists the choices. Two effects that add the same parameter are
-    refused.
+    refused. :class:`~sensfw.errors.OptionError` names every problem at its path
+    (``effects[1].attach``).
     """
-    preferred = preferred or {}
-    out, owners = [], {}
-    for eff in effects:
-        fits = fitting_places(places, eff)
-        needs = tuple(getattr(eff, "needs", ()))
-        if not fits:
-            kinds = sorted({pl.kind for pl in places.values()})
-            if any(pl.kind in eff.fits for pl in places.values()):
-                raise SensfwError(f"effect {eff.name!r} needs the hook(s) {', '.join(needs)}, "
-                                  f"which no place of model {model!r} offers")
-            raise SensfwError(f"effect {eff.name!r} fits places of kind "
-                              f"{', '.join(eff.fits)}; model {model!r} has places of kind "
-                              f"{', '.join(kinds) or '(none)'}")
-        name = eff.attach
-        if name is None:
-            first = [n for n in preferred.get(eff.name, ()) if n in fits]
-            if first:
-                name = first[0]
-            elif len(fits) == 1:
-                name = fits[0]
-            else:
-                raise SensfwError(f"effect {eff.name!r}: say where (attach = ...); it fits "
-                                  f"{', '.join(fits)} of model {model!r}")
-        elif name not in fits:
-            if name not in places:
-                what = f"model {model!r} has no place {name!r}"
-            elif places[name].kind not in eff.fits:
-                what = f"{name!r} is a {places[name].kind}"
-            else:
-                what = f"{name!r} does not offer {', '.join(needs)}"
-            raise SensfwError(f"effect {eff.name!r} cannot attach to {name!r} ({what}); it "
-                              f"fits {', '.join(fits)}")
-        eff.attach = name
-        for p in eff.parameters():
-            if p.name in owners:
-                raise SensfwError(f"effects {owners[p.name]!r} and {eff.name!r}@{name} both "
-                                  f"add parameter {p.name!r}")
-            owners[p.name] = f"{eff.name}@{name}"
-        out.append((eff, places[name]))
-    return out
+    attached, problems = _resolve(places, effects, model, preferred or {})
+    if problems:
+        raise OptionError(describe(problems), option=problems[0][0], problems=problems)
+    return attached
+
+
+def attach_effects(places: Mapping[str, Place], specs: Sequence, model: str,
+                   preferred: Mapping[str, Sequence[str]] | None = None
+                   ) -> tuple[tuple[EffectLike, ...], tuple[tuple[EffectLike, Place], ...]]:
+    """``(effects, attached)``: the effects of ``specs`` (:func:`make_effect`) and each with
+    its place (:func:`resolve_places`); every problem of every spec is reported at once, at
+    its path (``effects[1].name``, ``effects[0].attach``), as one
+    :class:`~sensfw.errors.OptionError`."""
+    made, problems = [], []
+    for i, spec in enumerate(specs):
+        try:
+            made.append((i, make_effect(spec)))
+        except UnknownPluginError as err:
+            problems.append((f"effects[{i}].name", str(err)))
+        except OptionError as err:
+            problems += [(f"effects[{i}].{p}" if p else f"effects[{i}]", m)
+                         for p, m in err.problems]
+    attached, found = _resolve(places, [e for _, e in made], model, preferred or {},
+                               index=[i for i, _ in made])
+    problems += found
+    if problems:
+        problems.sort(key=lambda pm: int(pm[0].split("[", 1)[1].split("]", 1)[0]))
+        raise OptionError(describe(problems), option=problems[0][0], problems=problems)
+    return tuple(e for _, e in made), tuple(attached)

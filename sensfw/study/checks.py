@@ -3,9 +3,11 @@ what the study resolved from it: the model's parameters and sensors, the excitat
 
 Every problem is returned at its dotted path
 (``stages[1].design_options.levelz: unknown option; known: levels``), all at once. Every
-design, scorer and surrogate the study names is built with its options; scorers are also
-checked against the study's excitation (an FRF band above Nyquist or outside the sweep),
-designs against the stage's design space where its variables are known before the run.
+design, scorer and surrogate the study names is built with its options through the one
+check of every plugin kind (:func:`plugin_problems`, :mod:`sensfw.options`); scorers are
+also checked against the study's excitation (an FRF band above Nyquist or outside the
+sweep), designs against the stage's design space where its variables are known before the
+run.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from ..errors import SensfwError, UnknownPluginError
+from ..options import Problem, build
 from ..params import DesignSpace, ParameterSet
 from .schema import ParameterOverride, StageSpec
 from .units import to_unit
@@ -58,36 +61,23 @@ def bound_overrides(overrides: Mapping[str, ParameterOverride], declared: Parame
     return changes, problems
 
 
-def _message(err: Exception) -> str:
-    return str(err) if isinstance(err, SensfwError) else f"invalid value ({err})"
-
-
-def option_problems(build: Callable[..., Any], options: dict[str, Any],
-                    known: list[str]) -> list[tuple[str | None, str]]:
-    """(option or None, message) for every problem of ``options``: unknown keys (listing
-    ``known``), then each option alone through ``build(**{key: value})``, then all together.
-    Returns the built plugin's problems only; ``build`` must raise on a bad option."""
-    out: list[tuple[str | None, str]] = [
-        (k, f"unknown option; known: {', '.join(known) or '(none)'}")
-        for k in options if k not in known]
-    given = {k: v for k, v in options.items() if k in known}
-    # any exception of a plugin's constructor is a problem of the options it was given
-    # (third-party plugins may not raise OptionError on a value of the wrong type)
-    for key, value in given.items():
-        try:
-            build(**{key: value})
-        except Exception as err:
-            out.append((key, _message(err)))
-    if not out:
-        try:
-            build(**given)
-        except Exception as err:
-            out.append((getattr(err, "option", None), _message(err)))
-    return out
-
-
-def _at(where: str, problems: list[tuple[str | None, str]]) -> Problems:
+def _at(where: str, problems: list[Problem]) -> Problems:
+    """Problems of a plugin's options at their dotted paths under ``where``."""
     return [(f"{where}.{opt}" if opt else where, msg) for opt, msg in problems]
+
+
+def plugin_problems(registry, name: str, options: Mapping[str, Any], where: str,
+                    name_at: str | None = None) -> tuple[Any, Problems]:
+    """``(plugin or None, problems)``: the plugin registered as ``name`` built with
+    ``options`` (:func:`sensfw.options.build`, the one check of every plugin kind), every
+    problem at its path under ``where`` (an unknown name at ``name_at``, default
+    ``where``)."""
+    try:
+        cls = registry.get(name)
+    except UnknownPluginError as err:
+        return None, [(name_at or where, str(err))]
+    plugin, found = build(cls, options)
+    return plugin, _at(where, found)
 
 
 def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace] | None,
@@ -96,12 +86,8 @@ def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace]
     stage's variables are not taken from an earlier stage)."""
     from ..plugins import designs
 
-    try:
-        cls = designs.get(st.design)
-    except UnknownPluginError as err:
-        return [(f"{where}.design", str(err))]
-    found = _at(f"{where}.design_options",
-                option_problems(cls, st.design_options, sorted(cls.defaults)))
+    design, found = plugin_problems(designs, st.design, st.design_options,
+                                    f"{where}.design_options", name_at=f"{where}.design")
     if found or space is None:
         return found
     if isinstance(st.variables, str) and st.variables.startswith("selected:"):
@@ -110,7 +96,7 @@ def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace]
     if not set(names) <= set(variables):
         return []  # unknown variables are reported at stages[i].variables
     try:
-        cls(**st.design_options).n_runs(space(names))
+        design.n_runs(space(names))
     except SensfwError as err:
         return [(f"{where}.design", str(err))]
     return []
@@ -124,20 +110,14 @@ def _scorers(st: StageSpec, where: str, excitation, sensors: Sequence[str] | Non
     labels = []
     for j, sc in enumerate(st.scorers):
         at = f"{where}.scorers[{j}]"
-        try:
-            cls = scorers.get(sc.name)
-        except UnknownPluginError as err:
-            problems.append((f"{at}.name", str(err)))
-            cls = None
-        if cls is not None:
-            found = option_problems(cls, sc.options(), sorted(cls.defaults))
-            problems += _at(at, found)
-            if not found and excitation is not None:
-                try:
-                    cls(**sc.options()).check_excitation(excitation)
-                except Exception as err:
-                    opt = getattr(err, "option", None)
-                    problems.append((f"{at}.{opt}" if opt else at, _message(err)))
+        scorer, found = plugin_problems(scorers, sc.name, sc.options(), at, name_at=f"{at}.name")
+        problems += found
+        if scorer is not None and excitation is not None:
+            try:
+                scorer.check_excitation(excitation)
+            except SensfwError as err:
+                opt = getattr(err, "option", None)
+                problems.append((f"{at}.{opt}" if opt else at, str(err)))
         if sc.channel is not None and sensors is not None and \
                 sc.channel not in (*sensors, "force"):
             problems.append((f"{at}.channel", f"unknown channel {sc.channel!r}; the model "
@@ -150,18 +130,12 @@ def _scorers(st: StageSpec, where: str, excitation, sensors: Sequence[str] | Non
 
 def _surrogates(st: StageSpec, where: str) -> Problems:
     from ..plugins import surrogates
-    from ..surrogates.base import option_problems as surrogate_problems
 
     problems: Problems = []
     seen = []
     for j, sur in enumerate(st.surrogates):
         at = f"{where}.surrogates[{j}]"
-        try:
-            cls = surrogates.get(sur.name)
-        except UnknownPluginError as err:
-            problems.append((at, str(err)))
-        else:
-            problems += _at(at, surrogate_problems(cls, sur.options()))
+        problems += plugin_problems(surrogates, sur.name, sur.options(), at)[1]
         if sur.key in seen:
             problems.append((f"{at}.label", f"duplicate surrogate label {sur.key!r}"))
         seen.append(sur.key)

@@ -11,12 +11,12 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from ..errors import SensfwError, StudyError, UnknownPluginError
+from ..errors import SensfwError, StudyError
 from ..excitation import Excitation, make_excitation
 from ..models.base import IMPLICIT_METHODS, Model, SolverSettings
 from ..models.stepsize import CALIBRATED_METHODS
 from ..params import DesignSpace, Parameter, ParameterSet
-from .checks import Problems, bound_overrides, check_stages
+from .checks import Problems, bound_overrides, check_stages, plugin_problems
 from .schema import GainSection, StageSpec, StudyFile
 from .units import to_unit
 
@@ -100,18 +100,10 @@ class Study:
     def _resolve_model(self, problems: Problems) -> Model | None:
         from ..plugins import models
 
-        try:
-            cls = models.get(self.spec.model.name)
-        except UnknownPluginError as err:
-            problems.append(("model.name", str(err)))
-            return None
-        try:
-            model = cls(**self.spec.model.options)
-        except TypeError as err:
-            problems.append(("model.options", f"not accepted by {self.spec.model.name}: {err}"))
-            return None
-        except SensfwError as err:  # e.g. an unknown effect or attach point
-            problems.append(("model.options", str(err)))
+        model, found = plugin_problems(models, self.spec.model.name, self.spec.model.options,
+                                       "model.options", name_at="model.name")
+        problems += found
+        if model is None:
             return None
         out = self.spec.model.output or model.default_output
         if out not in model.sensors:

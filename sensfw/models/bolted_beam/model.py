@@ -39,14 +39,16 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import asdict, replace
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
+from pydantic import Field
 
 from ...errors import DivergenceError, SimulationError
 from ...excitation import Excitation
+from ...options import PluginOptions
 from ...params import ParameterSet
-from ..base import Model, Signals, SolverSettings
+from ..base import EFFECTS, Model, Signals, SolverSettings
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
 from ..places import Place
@@ -80,6 +82,11 @@ class BoltedBeam(Model):
     #: joint), dry friction at beam1 (the shaker's drive point)
     preferred_places: ClassVar[dict[str, tuple[str, ...]]] = {
         "cubic_stiffness": ("joint",), "dry_friction": ("beam1",)}
+
+    class Options(PluginOptions):
+        geometry: Geometry | None = Field(
+            None, description="a table of the fixed data (Geometry's fields) or none")
+        effects: list[Any] = Field((), description=EFFECTS)
 
     def __init__(self, geometry: Geometry | dict | None = None, effects: tuple = ()):
         if isinstance(geometry, dict):

@@ -21,14 +21,16 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import asdict, replace
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
+from pydantic import Field
 
 from ...errors import DivergenceError, SimulationError
 from ...excitation import Excitation
+from ...options import Bool, PluginOptions
 from ...params import MM, ParameterSet
-from ..base import Model, Signals, SolverSettings
+from ..base import EFFECTS, Model, Signals, SolverSettings
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
 from ..places import Place
@@ -66,8 +68,17 @@ class ShaftAssembly(Model):
                          "cubic_stiffness"), ("crankshaft",)),
     }
 
-    def __init__(self, linearised: bool = False, geometry: Geometry | None = None,
+    class Options(PluginOptions):
+        linearised: Bool = Field(False, description="true or false")
+        geometry: Geometry | None = Field(
+            None, description="a table of the fixed data (Geometry's fields) or none")
+        effects: list[Any] = Field((), description=EFFECTS)
+
+    def __init__(self, linearised: bool = False, geometry: Geometry | dict | None = None,
                  effects: tuple = ()):
+        if isinstance(geometry, dict):
+            geometry = Geometry(**{k: tuple(v) if isinstance(v, list) else v
+                                   for k, v in geometry.items()})
         self.linearised = bool(linearised)
         self.geometry = geometry or Geometry()
         super().__init__(effects)
