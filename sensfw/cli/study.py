@@ -131,15 +131,12 @@ def compare_designs_cmd(
     progress: ShowProgress = True,
 ) -> None:
     """Compare design strategies on the study's screening stage against a Sobol' reference."""
-    from ..analysis.compare_designs import agreement_table, compare_designs
-    from ..plugins import designs as registry
+    from ..analysis.compare_designs import agreement_table, build_comparison, compare_designs
     from ..report.measure import write_designs_report
     from ..study import Study
 
     study = Study.load(study_file)
     names = [d.strip() for d in designs.split(",") if d.strip()]
-    for n in names:
-        registry.get(n)
     opts: dict[str, dict] = {}
     for item in option or []:
         key, sep, val = item.partition("=")
@@ -151,6 +148,7 @@ def compare_designs_cmd(
         except json.JSONDecodeError:
             value = val
         opts.setdefault(dname, {})[oname] = value
+    build_comparison(study, names, opts, reference_runs, reference_surrogate)  # before any run
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_designs(study, runner, names, opts, reference_runs,
                                  reference_surrogate, log=say)
