@@ -21,6 +21,7 @@ from .evaluate import evaluate, make_scorers, needs_reference, reference_spec
 from .models.base import Signals
 from .params import DesignSpace
 from .runs import RunCounts, RunStore
+from .runs.store import run_step
 from .study import StageSpec, Study
 
 
@@ -74,22 +75,24 @@ def _select(stage: StageSpec, screening, scores: pd.DataFrame) -> list[str]:
     return list(screening.select(threshold=sel.threshold, max_variables=sel.max_variables))
 
 
-def _jsonable(x):
+def jsonable(x):
+    """``x`` with numpy scalars and arrays, DataFrames (records) and Series (dicts) turned into
+    what :func:`json.dumps` writes; non-finite floats become ``None`` (JSON has no NaN)."""
     if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
+        return {str(k): jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
+        return [jsonable(v) for v in x]
     if isinstance(x, (np.floating, float)):
         x = float(x)
         return x if math.isfinite(x) else None
     if isinstance(x, np.integer):
         return int(x)
     if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
+        return jsonable(x.tolist())
     if isinstance(x, pd.DataFrame):
-        return _jsonable(x.to_dict(orient="records"))
+        return jsonable(x.to_dict(orient="records"))
     if isinstance(x, pd.Series):
-        return _jsonable(x.to_dict())
+        return jsonable(x.to_dict())
     return x
 
 
@@ -136,9 +139,9 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                     "options": {k: v for k, v in opts.items() if k != "bounds"},
                     **{k: est.summary_.get(k) for k in ("r2", "r2_adj", "q2", "f_stat",
                                                         "f_pvalue", "n_obs")},
-                    "coefficients": _jsonable(
+                    "coefficients": jsonable(
                         est.coefficient_table_[["term", "estimate", "se", "t", "p"]]),
-                    "coefficients_coded": _jsonable(
+                    "coefficients_coded": jsonable(
                         est.coefficient_table_coded_[["term", "estimate", "se", "t", "p"]]),
                 }
 
@@ -210,20 +213,97 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
     return result
 
 
-def run_study(study: Study, runner, log: Callable[[str], None] = lambda s: None,
-              known: dict | None = None) -> StudyResult:
-    """Every stage in order; ``runner`` a :class:`~sensfw.runs.Runner` (or
-    :class:`~sensfw.runs.StoredRuns` to rebuild without simulating)."""
-    done: dict[str, StageResult] = {}
-    stages = []
-    for stage in study.stages:
-        log(f"stage {stage.name}: design {stage.design}")
-        res = run_stage(study, stage, runner, done, known)
-        done[stage.name] = res
-        stages.append(res)
-        if res.selected is not None:
-            log(f"stage {stage.name}: selected {', '.join(res.selected) or '(none)'}")
-    return StudyResult(study=study, stages=stages, store=runner.store, counts=runner.counts)
+def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: None,
+              known: dict | None = None, *, out: str | Path | None = None,
+              report: bool = True) -> StudyResult:
+    """Every stage in order.
+
+    Parameters
+    ----------
+    runner
+        A :class:`~sensfw.runs.Runner` (or :class:`~sensfw.runs.StoredRuns` to rebuild
+        without simulating); default, with ``out``: a runner on the run store ``out/runs``
+        with the study's ``[execution]`` settings, closed at the end.
+    out : path, optional
+        The output folder to write, the one :func:`load_result` reads back: the study file
+        (``study.toml``) before anything runs, then ``results.json``, ``timing.json`` and,
+        with ``report``, ``report.html`` (:func:`write_result`).
+    known : dict, optional
+        Scores by run key from an earlier ``results.json`` (:func:`score_runs`).
+    """
+    import time
+
+    from .runs import Runner, RunStore
+
+    own = runner is None
+    if own:
+        if out is None:
+            raise SensfwError("run_study needs a runner or an output folder (out=)")
+        ex = study.spec.execution
+        runner = Runner(store=RunStore(Path(out) / "runs"), backend=ex.backend,
+                        workers=ex.workers, scheduler=ex.scheduler)
+    if out is not None:
+        keep_study_file(study, out)
+    t0 = time.perf_counter()
+    try:
+        done: dict[str, StageResult] = {}
+        stages = []
+        for stage in study.stages:
+            log(f"stage {stage.name}: design {stage.design}")
+            res = run_stage(study, stage, runner, done, known)
+            done[stage.name] = res
+            stages.append(res)
+            if res.selected is not None:
+                log(f"stage {stage.name}: selected {', '.join(res.selected) or '(none)'}")
+    finally:
+        if own:
+            runner.close()
+    result = StudyResult(study=study, stages=stages, store=runner.store, counts=runner.counts)
+    if out is not None:
+        write_result(result, out, report=report, wall=time.perf_counter() - t0)
+    return result
+
+
+def keep_study_file(study: Study, out: str | Path) -> Path:
+    """``out/study.toml``: a copy of the study's file (or, for a study built from a dict,
+    its content as TOML), so that the folder alone rebuilds its report
+    (:func:`load_result`)."""
+    import shutil
+
+    import tomlkit
+
+    target = Path(out) / "study.toml"
+    target.parent.mkdir(parents=True, exist_ok=True)
+    if study.source is not None and Path(study.source).is_file():
+        if not target.exists() or not target.samefile(study.source):
+            shutil.copyfile(study.source, target)
+        return target
+    data = study.spec.model_dump(mode="json", exclude_none=True)
+    try:
+        target.write_text(tomlkit.dumps(data), encoding="utf-8")
+    except (TypeError, ValueError) as err:  # tomlkit's ConvertError: a None in an option
+        raise SensfwError(f"{target}: the study cannot be written as TOML ({err}; TOML has "
+                          "no null: leave such an option out)") from None
+    return target
+
+
+def write_result(result: StudyResult, out: str | Path, report: bool = True,
+                 wall: float | None = None) -> dict:
+    """Write ``results.json`` (:func:`results_json`, returned), ``timing.json`` (``wall``
+    seconds and the run counts) and, with ``report``, ``report.html`` into ``out``."""
+    import json
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    data = results_json(result)
+    (out / "results.json").write_text(json.dumps(data, indent=1, sort_keys=False))
+    (out / "timing.json").write_text(json.dumps(
+        {"wall_s": wall, "runs": result.counts.as_dict()}, indent=1))
+    if report:
+        from .report.study import write_study_report
+
+        write_study_report(result, out / "report.html")
+    return data
 
 
 def load_result(out_dir: str | Path) -> StudyResult:
@@ -288,14 +368,6 @@ def plan(study: Study) -> list[dict]:
     return out
 
 
-def run_step(store: RunStore, key: str) -> dict:
-    """The time step a stored run used, what set it, and the integrator (adaptive runs: at
-    most ``step``, with ``mean_step``); ``{}`` for models without one."""
-    rec = store.record(key) or {}
-    return {k: rec[k] for k in ("step", "step_limited_by", "integrator", "mean_step")
-            if k in rec}
-
-
 def results_json(res: StudyResult) -> dict:
     """The machine-readable summary (``results.json``); deterministic for identical runs."""
     stages = []
@@ -314,7 +386,7 @@ def results_json(res: StudyResult) -> dict:
             entry["reference_key"] = st.reference_key
         if st.screening is not None:
             entry["importance"] = st.screening.importance.to_dict()
-            entry["analysis"] = _jsonable(st.screening.table.reset_index())
+            entry["analysis"] = jsonable(st.screening.table.reset_index())
         if st.selected is not None:
             entry["sensitivity"] = st.screening.importance.to_dict()
             entry["selected"] = list(st.selected)
@@ -326,5 +398,5 @@ def results_json(res: StudyResult) -> dict:
             entry["notes"] = st.notes
         stages.append(entry)
     source = str(Path(res.study.source).resolve()) if res.study.source else None
-    return _jsonable({"study": res.study.name, "study_file": source,
+    return jsonable({"study": res.study.name, "study_file": source,
                       "runs": res.counts.as_dict(), "stages": stages})
