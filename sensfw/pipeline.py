@@ -104,10 +104,27 @@ def _declared_options(name: str) -> set[str]:
     return set(options_model(surrogates.get(name)).model_fields)
 
 
+def _stored_validation(stored: dict | None, est, X) -> dict | None:
+    """``stored`` (a surrogate's validation from an earlier ``results.json``) if it is the
+    validation of ``est``: its fitted values are ``est``'s predictions at ``X`` (a changed
+    option or score gives others), else None."""
+    if not stored or "fitted" not in stored:
+        return None
+    fitted = np.asarray([np.nan if v is None else v for v in stored["fitted"]], float)
+    pred = np.asarray(est.predict(X), float)
+    if fitted.shape != pred.shape or not np.allclose(fitted, pred, rtol=1e-9, atol=1e-12):
+        return None
+    return dict(stored)
+
+
 def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd.DataFrame,
-                   scores: pd.DataFrame, result: StageResult) -> None:
+                   scores: pd.DataFrame, result: StageResult,
+                   validated: dict | None = None) -> None:
     """Fit every requested surrogate to every score; Eq. 18 statistics go to ``regression``,
-    the validation of every surrogate to ``validation``."""
+    the validation of every surrogate to ``validation``. ``validated`` (score label ->
+    surrogate -> validation, from an earlier ``results.json``) is taken instead of validating
+    again where it belongs to the same fit (:func:`_stored_validation`): cross-validation
+    refits a surrogate k (and up to n) times, and ``auto`` chooses again in every refit."""
     from .analysis.validation import validate
     from .surrogates import make_surrogate
 
@@ -131,7 +148,9 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                 result.notes.append(f"{label}/{name}: {err}")
                 continue
             result.surrogates[label][name] = est
-            result.validation[label][name] = validate(est, X, y[ok], seed=study.spec.study.seed)
+            stored = _stored_validation((validated or {}).get(label, {}).get(name), est, X)
+            result.validation[label][name] = stored or validate(est, X, y[ok],
+                                                                seed=study.spec.study.seed)
             if est.summary_ is not None and est.coefficient_table_ is not None \
                     and label not in result.regression:
                 result.regression[label] = {
@@ -175,11 +194,12 @@ def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner,
 
 
 def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResult],
-              known: dict | None = None) -> StageResult:
+              known: dict | None = None, validated: dict | None = None) -> StageResult:
     """One stage: :func:`~sensfw.evaluate.evaluate` its design, then the design's analysis
     (screening and selection) or the surrogates (+ confirmation runs). ``runner`` is a
     :class:`~sensfw.runs.Runner` or a :class:`~sensfw.runs.StoredRuns`; ``known`` holds
-    scores by run key from an earlier ``results.json``."""
+    scores by run key and ``validated`` the stage's surrogate validation
+    (:func:`fit_surrogates`) from an earlier ``results.json``."""
     from .designs import make_design
 
     variables = stage_variables(study, stage, done)
@@ -207,7 +227,7 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
         except SensfwError as err:
             result.notes.append(f"analysis of {stage.design}: {err}")
     if stage.surrogates:
-        fit_surrogates(study, stage, space, table, scores, result)
+        fit_surrogates(study, stage, space, table, scores, result, validated)
         if stage.confirmation_runs:
             confirm(study, stage, space, runner, result, scorers, ev.reference)
     return result
@@ -215,7 +235,7 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
 
 def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: None,
               known: dict | None = None, *, out: str | Path | None = None,
-              report: bool = True) -> StudyResult:
+              report: bool = True, validated: dict | None = None) -> StudyResult:
     """Every stage in order.
 
     Parameters
@@ -229,7 +249,11 @@ def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: 
         (``study.toml``) before anything runs, then ``results.json``, ``timing.json`` and,
         with ``report``, ``report.html`` (:func:`write_result`).
     known : dict, optional
-        Scores by run key from an earlier ``results.json`` (:func:`score_runs`).
+        Scores by run key from an earlier ``results.json``
+        (:func:`~sensfw.evaluate.score_runs`).
+    validated : dict, optional
+        Surrogate validation by stage name from an earlier ``results.json``
+        (:func:`fit_surrogates`).
     """
     import time
 
@@ -250,7 +274,8 @@ def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: 
         stages = []
         for stage in study.stages:
             log(f"stage {stage.name}: design {stage.design}")
-            res = run_stage(study, stage, runner, done, known)
+            res = run_stage(study, stage, runner, done, known,
+                            (validated or {}).get(stage.name))
             done[stage.name] = res
             stages.append(res)
             if res.selected is not None:
@@ -311,7 +336,8 @@ def load_result(out_dir: str | Path) -> StudyResult:
     simulating: the study file copied there (``study.toml``, else the path recorded in
     ``results.json``), the run store ``runs/`` and the scores in ``results.json``. Designs
     are regenerated (deterministic for the study's seed), analyses and surrogates refitted
-    to the stored scores; confirmation runs are scored from the store."""
+    to the stored scores (their validation is taken from ``results.json`` where it belongs
+    to the same fit); confirmation runs are scored from the store."""
     import json
 
     from .runs import StoredRuns
@@ -332,8 +358,9 @@ def load_result(out_dir: str | Path) -> StudyResult:
         for r in st.get("runs", []):
             known[r["key"]] = {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
                                if r["label"] in v}
+    validated = {st["name"]: st["validation"] for st in stages if "validation" in st}
     runs = StoredRuns(RunStore(out / "runs"), RunCounts(**data.get("runs", {})))
-    return run_study(study, runs, known=known)
+    return run_study(study, runs, known=known, validated=validated)
 
 
 def plan(study: Study) -> list[dict]:

@@ -207,3 +207,27 @@ def test_run_study_writes_the_folder_load_result_reads(tmp_path):
     assert json.loads((tmp_path / "timing.json").read_text())["runs"]["new"] == 7 + 9 - 5
     again = load_result(tmp_path)  # StoredRuns: would raise on a missing run
     assert json.loads(json.dumps(results_json(again)))["stages"] == written["stages"]
+
+
+def test_a_rebuild_takes_the_stored_validation_of_the_same_fit(tmp_path, monkeypatch):
+    """`sensfw report` does not cross-validate again (issue 26, item 6): each surrogate's
+    validation comes from results.json when its fitted values are the refitted surrogate's
+    predictions; a validation of another fit is not taken."""
+    import sensfw.analysis.validation
+    from sensfw.pipeline import load_result, run_study
+    from sensfw.study import Study
+
+    run_study(Study.from_dict(LIBRARY_STUDY), out=tmp_path, report=False)
+    written = json.loads((tmp_path / "results.json").read_text())
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("validated again")
+
+    monkeypatch.setattr(sensfw.analysis.validation, "validate", refuse)
+    again = load_result(tmp_path)
+    stored = written["stages"][1]["validation"]["y"]["eq18"]
+    assert again.stages[1].validation["y"]["eq18"] == stored
+    written["stages"][1]["validation"]["y"]["eq18"]["fitted"][0] += 1.0  # another fit's
+    (tmp_path / "results.json").write_text(json.dumps(written))
+    with pytest.raises(AssertionError, match="validated again"):
+        load_result(tmp_path)
