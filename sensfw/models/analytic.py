@@ -23,6 +23,7 @@ from ..excitation import Chirp
 from ..options import Float, PluginOptions
 from ..params import Parameter, ParameterSet
 from ..plugins import models
+from ..testing import ishigami
 from .base import Model, Signals
 
 
@@ -34,7 +35,8 @@ def scalar_signals(values: Mapping[str, float]) -> Signals:
 
 @models.register("ishigami")
 class Ishigami(Model):
-    """``y = sin x1 + a sin^2 x2 + b x3^4 sin x1`` on [-pi, pi]^3."""
+    """``y = sin x1 + a sin^2 x2 + b x3^4 sin x1`` on [-pi, pi]^3
+    (:func:`sensfw.testing.ishigami`)."""
 
     name = "ishigami"
     version = "1"
@@ -56,8 +58,7 @@ class Ishigami(Model):
 
     def simulate(self, params, excitation=None, solver=None) -> Signals:
         p = self.parameters().complete(params)
-        x1, x2, x3 = p["x1"], p["x2"], p["x3"]
-        y = math.sin(x1) + self.a * math.sin(x2) ** 2 + self.b * x3**4 * math.sin(x1)
+        y = ishigami([[p["x1"], p["x2"], p["x3"]]], self.a, self.b)[0]
         return scalar_signals({"y": y})
 
 

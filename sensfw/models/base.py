@@ -9,7 +9,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import SignalError
+from ..errors import DivergenceError, SignalError
 from ..excitation import Excitation
 from ..params import ParameterSet
 from .places import Hooks, Place, attach_effects
@@ -79,6 +79,19 @@ class Signals:
         return cls(t=np.asarray(arrays["t"]), force=np.asarray(arrays["force"]),
                    channels=channels, fs=float(arrays["fs"]), f_inst=f_inst, sweep_end=end,
                    **kw)
+
+
+def check_channels(model: str, channels: Mapping[str, np.ndarray], n: int,
+                   params: Mapping[str, float], step: float | None, unit: str = "") -> None:
+    """Raise :class:`~sensfw.errors.DivergenceError` for the first channel that is not ``n``
+    finite samples, or that exceeds 1e7 (``unit``): a run that blew up."""
+    limit = f"1e7 {unit}" if unit else "1e7"
+    for name, x in channels.items():
+        if len(x) != n or not np.all(np.isfinite(x)):
+            raise DivergenceError(model, f"diverged (non-finite {name!r})", params, step=step)
+        if np.max(np.abs(x)) > 1e7:
+            raise DivergenceError(model, f"diverged ({name!r} exceeds {limit})", params,
+                                  step=step)
 
 
 #: the description of a model's ``effects`` option (:mod:`sensfw.options`)

@@ -9,6 +9,7 @@ and the order of the user's keys survive; only the added lines are new.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import tomlkit
 from tomlkit.items import AoT, Array, InlineTable
@@ -19,6 +20,19 @@ def _table(parent, key: str, inline: bool = False):
     if key not in parent:
         parent[key] = tomlkit.inline_table() if inline else tomlkit.table()
     return parent[key]
+
+
+def _parameter_table(doc, name: str) -> tuple[Any, bool]:
+    """``doc``'s ``[parameters.NAME]`` table and whether it is new (created, with the
+    ``[parameters]`` super-table, at the end of the file)."""
+    params = doc.get("parameters")
+    if params is None:
+        params = doc["parameters"] = tomlkit.table(is_super_table=True)
+    entry = params.get(name)
+    if entry is None:
+        entry = params[name] = tomlkit.table()
+        return entry, True
+    return entry, False
 
 
 def _effects_entry(name: str, attach: str | None) -> InlineTable:
@@ -67,17 +81,10 @@ def add_effect(text: str, name: str, attach: str | None,
         effects.append(_effects_entry(name, attach))
     else:
         raise TypeError("[model].options.effects must be an array")
-    if parameters:
-        params = doc.get("parameters")
-        if params is None:
-            params = tomlkit.table(is_super_table=True)
-            doc["parameters"] = params
-        for pname, values in parameters.items():
-            entry = params.get(pname)
-            if entry is None:
-                entry = params[pname] = tomlkit.table()
-            for k, v in values.items():
-                entry[k] = float(v)
+    for pname, values in parameters.items():
+        entry, _ = _parameter_table(doc, pname)
+        for k, v in values.items():
+            entry[k] = float(v)
     if note:
         study = _table(doc, "study")
         old = str(study.get("description", ""))
@@ -101,14 +108,9 @@ def set_nominals(text: str, values: Mapping[str, float],
     """``text`` with ``[parameters.NAME] nominal = value`` for each of ``values`` (a table's
     other keys kept; a new table gets ``min``/``max`` from ``bounds``)."""
     doc = tomlkit.parse(text)
-    params = doc.get("parameters")
-    if params is None:
-        params = tomlkit.table(is_super_table=True)
-        doc["parameters"] = params
     for name, value in values.items():
-        entry = params.get(name)
-        if entry is None:
-            entry = params[name] = tomlkit.table()
+        entry, new = _parameter_table(doc, name)
+        if new:
             lo, hi = bounds[name]
             entry["min"], entry["max"] = float(lo), float(hi)
         entry["nominal"] = float(value)

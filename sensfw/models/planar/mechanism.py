@@ -168,8 +168,41 @@ class State:
             self.f[i + 2] += r[0] * fy - r[1] * fx
 
 
+class LinkHooks:
+    """The :class:`~sensfw.models.places.Hooks` that act on an assembly's ``laws`` (by place)
+    and ``links`` (force elements), shared by :class:`Mechanism` and the bolted beam's
+    assembly; ``_check(body, r)`` raises when ``r`` is not a point of ``body``."""
+
+    laws: dict
+    links: list[Link]
+
+    def _check(self, body: str, r: Point) -> None:
+        raise NotImplementedError
+
+    def contact_law(self, place: str) -> ContactLaw:
+        try:
+            return self.laws[place]
+        except KeyError:
+            raise SensfwError(f"place {place!r} has no law; places with laws: "
+                              f"{', '.join(self.laws)}") from None
+
+    def set_contact_law(self, place: str, law: ContactLaw) -> None:
+        self.contact_law(place)
+        self.laws[place] = law
+
+    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                  law: ForceLaw, about_static: bool = False) -> None:
+        self._check(body0, r0)
+        self._check(body1, r1)
+        if any(ln.name == name for ln in self.links):
+            raise SensfwError(f"a force element named {name!r} exists already")
+        self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
+                               lambda ops, u, v, contact: law(ops, u, v),
+                               about_static=about_static))
+
+
 @dataclass
-class Mechanism:
+class Mechanism(LinkHooks):
     """One parameter set's assembly: bodies, links, contact laws by place, places.
 
     Implements :class:`~sensfw.models.places.Hooks` for effects. ``follows`` records, for
@@ -183,28 +216,7 @@ class Mechanism:
     ground: str = "H"
     follows: dict[str, tuple[str, Point]] = field(default_factory=dict)
 
-    # ---- hooks for effects ------------------------------------------------------------------
-    def contact_law(self, place: str) -> ContactLaw:
-        try:
-            return self.laws[place]
-        except KeyError:
-            raise SensfwError(f"place {place!r} has no contact law; contact places: "
-                              f"{', '.join(self.laws)}") from None
-
-    def set_contact_law(self, place: str, law: ContactLaw) -> None:
-        self.contact_law(place)
-        self.laws[place] = law
-
-    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
-                  law: ForceLaw, about_static: bool = False) -> None:
-        for b in (body0, body1):
-            self._body(b)
-        if any(ln.name == name for ln in self.links):
-            raise SensfwError(f"a force element named {name!r} exists already")
-        self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
-                               lambda ops, u, v, contact: law(ops, u, v),
-                               about_static=about_static))
-
+    # ---- hooks for effects (and LinkHooks') -------------------------------------------------
     def add_jenkins(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
                     direction: Point, stiffness: float, slip_force: float) -> None:
         raise SensfwError(f"{type(self).__name__} has no Jenkins elements (a spring in series "
@@ -224,6 +236,9 @@ class Mechanism:
         extra_inertia = mass * (at[0] ** 2 + at[1] ** 2) if b.ndof == 3 else 0.0
         self.bodies = [replace(x, mass=x.mass + mass, inertia=x.inertia + extra_inertia)
                        if x.name == body else x for x in self.bodies]
+
+    def _check(self, body: str, r: Point) -> None:
+        self._body(body)
 
     def _body(self, name: str) -> Body:
         for b in self.bodies:

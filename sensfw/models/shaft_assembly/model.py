@@ -26,11 +26,11 @@ from typing import Any, ClassVar
 import numpy as np
 from pydantic import Field
 
-from ...errors import DivergenceError, SimulationError
+from ...errors import SimulationError
 from ...excitation import Excitation
 from ...options import Bool, PluginOptions
 from ...params import MM, ParameterSet
-from ..base import EFFECTS, Model, Signals, SolverSettings
+from ..base import EFFECTS, Model, Signals, SolverSettings, check_channels
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
 from ..places import Place
@@ -182,13 +182,7 @@ class ShaftAssembly(Model):
             channels, stats = planar_exudyn.solve(built, excitation.fs, n_out, choice)
         except exu.SolverError as exc:
             raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
-        for name, x in channels.items():
-            if len(x) != n_out or not np.all(np.isfinite(x)):
-                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p,
-                                      step=choice.step)
-            if np.max(np.abs(x)) > 1e7:
-                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p,
-                                      step=choice.step)
+        check_channels(self.name, channels, n_out, p, choice.step, unit="m/s^2")
         t = excitation.time()
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),
