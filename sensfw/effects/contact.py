@@ -10,7 +10,7 @@ from dataclasses import replace
 from typing import ClassVar
 
 from ..errors import SensfwError
-from ..models.contact import Friction as FrictionLaw
+from ..models.contact import FrictionLaw
 from ..params import MM, Parameter
 from ..plugins import effects
 from .base import Effect

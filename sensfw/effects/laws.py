@@ -12,8 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..models.contact import Friction as FrictionLaw
-from ..models.contact import numpy_ops
+from ..models.contact import FrictionLaw, numpy_ops
 from ..models.places import ContactLaw, JointLaw
 from ..models.planar import plus
 

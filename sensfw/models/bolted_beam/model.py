@@ -1,7 +1,7 @@
 """The bolted lap-joint beam (UNESP-BERT rig) as an Exudyn model.
 
 Two aluminium beams joined by a bolted half-lap joint, clamped at one end, driven by a
-shaker at 85 mm from the clamp (:mod:`.parameters` for the geometry, :mod:`.layout` for the
+shaker at 85 mm from the clamp (:mod:`.parameters` for the geometry, :mod:`.mechanics` for the
 mechanics). Outputs named like the measured channels: ``Acc1`` (free end), ``Acc2`` (below
 the joint, on beam2), ``Acc3`` (above it, on beam1), ``Acc4`` (near the clamp), transverse
 accelerations in m/s^2, and ``Laser``, the transverse velocity of the free end in m/s.
@@ -53,8 +53,7 @@ from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
 from ..places import Place
 from ..stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
-from . import layout as mechanics
-from . import simulation
+from . import mechanics, simulation
 from .assembly import BeamAssembly, BeamContacts, Structure, modal_damping, solve_static
 from .parameters import PARAMETERS, Geometry
 

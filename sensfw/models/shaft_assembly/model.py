@@ -1,7 +1,7 @@
 """The benchmark model: a nested output-shaft assembly with contacts, simulated with Exudyn.
 
 An analogue of the paper's e-bike output shaft (Sect. 2.2, Fig. 2, Fig. 6); its mechanics are
-in :mod:`.layout`, its parameters (Table 1) in :mod:`.table1`. The shaker pushes the
+in :mod:`.mechanics`, its parameters (Table 1) in :mod:`.table1`. The shaker pushes the
 crankshaft radially at its end with the excitation force; accelerometers sit on C (axial, the
 paper's output; radial) and on D (axial, radial).
 
@@ -11,7 +11,7 @@ evaluates it in C++ inside its explicit RK4 integrator, with no Python in the ti
 (``bench/model.py`` compares with the same model built with Python user functions). The same
 force laws evaluate with numpy for the static equilibrium the simulation starts from.
 
-Effects (:mod:`sensfw.effects`) act at the model's places (:func:`.layout.places`) through the
+Effects (:mod:`sensfw.effects`) act at the model's places (:func:`.mechanics.places`) through the
 hooks of :class:`~sensfw.models.planar.Mechanism`; the model applies them without knowing
 their names.
 """
@@ -34,10 +34,10 @@ from ..base import EFFECTS, Model, Signals, SolverSettings, check_channels
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
 from ..places import Place
-from ..planar import Contacts, Layout, Mechanism, statics
+from ..planar import Contacts, CoordinateIndex, Mechanism, statics
 from ..planar import exudyn as planar_exudyn
 from ..stepsize import StepChoice, choose_integration, first_order_eigenvalues, grid_step
-from . import layout as mechanics
+from . import mechanics
 from .table1 import GROUPS, PARAMETERS, Geometry
 
 
@@ -104,8 +104,9 @@ class ShaftAssembly(Model):
         self.apply_effects(mech, p)
         return mech
 
-    def layout(self, p: Mapping[str, float]) -> Layout:
-        return self.mechanism(p).layout()
+    def coordinates(self, p: Mapping[str, float]) -> CoordinateIndex:
+        """Where each body's coordinates start in the state vector (parameter values ``p``)."""
+        return self.mechanism(p).coordinates()
 
     def generalized_forces(self, q, qd, p: Mapping[str, float], contact=None) -> np.ndarray:
         """Static and contact forces on the coordinates (numpy, SI, no excitation)."""
@@ -123,7 +124,7 @@ class ShaftAssembly(Model):
         th_d = (c1 - c3) / (g.x_l3 - g.x_l1)
         y_d = -c1 - th_d * g.x_l1
         x_d = (p["bearing_preload"] / g.bearing_axial_k) ** (1 / g.bearing_axial_b) * MM
-        guess = np.zeros(mech.layout().n)
+        guess = np.zeros(mech.coordinates().n)
         guess[:8] = [x_d, y_d, th_d, x_d, y_d - cs, th_d, x_d, y_d + th_d * g.x_clutch]
         return statics.equilibrium(mech, guess, self.name, p)
 
