@@ -118,7 +118,7 @@ def _running(study, out_dir: Path, workers, backend, scheduler, progress, read_a
 
 
 def _json(path: Path, data) -> None:
-    from ..pipeline import jsonable
+    from ..results import jsonable
 
     path.write_text(json.dumps(jsonable(data), indent=1))
 
