@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import itertools
-from typing import ClassVar
+from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field, model_validator
 
+from ..options import Int, PluginOptions
 from ..params import DesignSpace
 from ..plugins import designs
 from .base import Design, DesignError, ScreeningResult, responses
@@ -27,21 +29,21 @@ class FullFactorial(Design):
     """
 
     name = "full_factorial"
-    defaults: ClassVar[dict] = {"levels": 3, "centre": "midpoint"}
 
-    def validate(self):
-        lv = self.options["levels"]
-        items = lv if isinstance(lv, (list, tuple)) else [lv]
-        if not items or any(not isinstance(n, int) or n < 2 for n in items):
-            raise DesignError(f"design {self.name!r}: levels must be an integer >= 2 or a "
-                              f"list of them, got {lv!r}", option="levels")
-        centre = self.options["centre"]
-        if centre not in ("midpoint", "nominal"):
-            raise DesignError(f"design {self.name!r}: centre must be 'midpoint' or 'nominal', "
-                              f"got {centre!r}", option="centre")
-        if centre == "nominal" and any(n % 2 == 0 for n in items):
-            raise DesignError(f"design {self.name!r}: centre = 'nominal' needs an odd number "
-                              f"of levels (a middle level), got {lv!r}", option="centre")
+    class Options(PluginOptions):
+        levels: Annotated[Int, Field(ge=2)] | Annotated[
+            list[Annotated[Int, Field(ge=2)]], Field(min_length=1)] = Field(
+            3, description="an integer >= 2 or a list of them (one per variable)")
+        centre: Literal["midpoint", "nominal"] = Field(
+            "midpoint", description="'midpoint' or 'nominal'")
+
+        @model_validator(mode="after")
+        def _nominal_needs_a_middle_level(self):
+            items = self.levels if isinstance(self.levels, list) else [self.levels]
+            if self.centre == "nominal" and any(n % 2 == 0 for n in items):
+                raise DesignError("centre = 'nominal' needs an odd number of levels (a "
+                                  f"middle level), got {self.levels!r}", option="centre")
+            return self
 
     def _levels(self, space: DesignSpace) -> list[int]:
         lv = self.options["levels"]

@@ -10,11 +10,13 @@ factorial follows.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import Field, model_validator
 
+from ..options import Int
 from ..params import DesignSpace
 from ..plugins import designs
 from .base import DesignError
@@ -29,17 +31,17 @@ class GeneralizedSubset(FullFactorial):
     (range of the level means: each level appears equally often in a fraction)."""
 
     name = "subset"
-    defaults: ClassVar[dict] = {**FullFactorial.defaults, "reduction": 3, "fraction": 0}
+    class Options(FullFactorial.Options):
+        reduction: Annotated[Int, Field(ge=2)] = Field(3, description="an integer >= 2")
+        fraction: Annotated[Int, Field(ge=0)] = Field(
+            0, description="an integer in [0, reduction)")
 
-    def validate(self):
-        super().validate()
-        red, frac = self.options["reduction"], self.options["fraction"]
-        if isinstance(red, bool) or not isinstance(red, int) or red < 2:
-            raise DesignError(f"design {self.name!r}: reduction must be an integer >= 2, got "
-                              f"{red!r}", option="reduction")
-        if isinstance(frac, bool) or not isinstance(frac, int) or not 0 <= frac < red:
-            raise DesignError(f"design {self.name!r}: fraction must be an integer in "
-                              f"[0, reduction), got {frac!r}", option="fraction")
+        @model_validator(mode="after")
+        def _fraction_below_reduction(self):
+            if not self.fraction < self.reduction:
+                raise DesignError("fraction must be an integer in [0, reduction), got "
+                                  f"{self.fraction!r}", option="fraction")
+            return self
 
     def _matrix(self, space: DesignSpace) -> np.ndarray:
         """Level indices (0 .. levels-1), one row per run."""

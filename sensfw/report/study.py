@@ -316,7 +316,7 @@ def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
 
 def _step_note(result) -> str:
     """How many runs took a smaller step than the study's, and why (auto_step)."""
-    from ..pipeline import run_step
+    from ..runs.store import run_step
 
     steps = [run_step(result.store, k) for st in result.stages for k in st.keys]
     adaptive = [s for s in steps if "adaptive" in s.get("integrator", "")]

@@ -8,7 +8,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from .models.stepsize import DEFAULT_TOLERANCE
+from ..models.stepsize import DEFAULT_TOLERANCE
 
 Quantity = str | float | int
 
@@ -86,35 +86,31 @@ class ParameterOverride(_Strict):
     max: Quantity | None = None
 
 
-class ScorerSpec(BaseModel):
-    """A scorer and its options; ``label`` names the result (default: the scorer name)."""
+class _PluginSpec(BaseModel):
+    """A plugin named in a stage with its options (every other key; checked against the
+    plugin's declared options, :mod:`sensfw.options`); ``label`` names it in the results
+    (default: its name)."""
 
     model_config = ConfigDict(extra="allow")
     name: str
     label: str | None = None
+
+    def options(self) -> dict[str, Any]:
+        return dict(self.model_extra or {})
+
+    @property
+    def key(self) -> str:
+        return self.label or self.name
+
+
+class ScorerSpec(_PluginSpec):
+    """A scorer, its options and the channel it scores (default: the study's output)."""
+
     channel: str | None = None
 
-    def options(self) -> dict[str, Any]:
-        return dict(self.model_extra or {})
 
-    @property
-    def key(self) -> str:
-        return self.label or self.name
-
-
-class SurrogateSpec(BaseModel):
-    """A surrogate and its options; ``label`` names it in the results (default: its name)."""
-
-    model_config = ConfigDict(extra="allow")
-    name: str
-    label: str | None = None
-
-    def options(self) -> dict[str, Any]:
-        return dict(self.model_extra or {})
-
-    @property
-    def key(self) -> str:
-        return self.label or self.name
+class SurrogateSpec(_PluginSpec):
+    """A surrogate and its options."""
 
 
 class SelectSpec(_Strict):
