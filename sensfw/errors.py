@@ -47,12 +47,16 @@ class UnknownPluginError(SensfwError, KeyError):
 
 
 class OptionError(SensfwError, ValueError):
-    """A plugin (design, scorer, surrogate) got a bad option; ``option`` names it (None: the
-    options together), so a study can report it at its dotted path."""
+    """A plugin (design, scorer, surrogate, model, effect) got a bad option; ``option`` names
+    it (a dotted path inside the plugin's options, e.g. ``effects[1].attach``; None: the
+    options together), so a study can report it at its dotted path. ``problems`` holds every
+    ``(option, message)`` when there are several (:mod:`sensfw.options`)."""
 
-    def __init__(self, message: str, option: str | None = None):
+    def __init__(self, message: str, option: str | None = None,
+                 problems: Iterable[tuple[str | None, str]] | None = None):
         super().__init__(message)
         self.option = option
+        self.problems = list(problems) if problems is not None else [(option, message)]
 
 
 class ParameterError(SensfwError, ValueError):

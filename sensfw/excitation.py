@@ -18,11 +18,8 @@ where it has one (``None`` for random noise), and either a closed-form expressio
 that a model evaluates inside its solver (:meth:`Excitation.force_expression`) or, for
 sampled signals, ``None`` (the model then feeds the samples step by step:
 :mod:`sensfw.models.drive`). :func:`make_excitation` rebuilds one from its
-:meth:`~Excitation.to_dict`. (A little over 400 lines: the five kinds share one contract and
-are read together.)
-
-(A little over 400 lines: the five excitation kinds share one interface and one rule for
-what enters a run's hash, kept side by side.)
+:meth:`~Excitation.to_dict`. (Over 400 lines: the five kinds share one interface and one
+rule for what enters a run's hash, and are read together.)
 """
 
 from __future__ import annotations
@@ -148,14 +145,11 @@ class Excitation(ABC):
 
 
 @dataclass(frozen=True)
-class Chirp(Excitation):
-    """The excitation of a study: a log chirp, optionally followed by a silent tail.
+class Sweep(Excitation):
+    """A sine sweep from ``f0`` to ``f1`` in ``duration`` s, then ``tail`` s of silence:
+    ``amplitude sin(phase(t))``. Subclasses give the phase (numpy, and as an expression of
+    time for a model's solver) and the instantaneous frequency."""
 
-    ``tail`` seconds of zero force after the sweep let the last resonances ring down inside
-    the record, so that FRF and order analysis see the whole response.
-    """
-
-    kind: ClassVar[str] = "log_chirp"
     closed_form: ClassVar[bool] = True
     f0: float = 50.0
     f1: float = 5000.0
@@ -168,30 +162,62 @@ class Chirp(Excitation):
     def __post_init__(self) -> None:
         _check_sweep(self.f0, self.f1, self.duration, self.fs)
         if self.tail < 0:
-            raise SignalError(f"chirp tail must be >= 0, got {self.tail}")
+            raise SignalError(f"{self.kind} tail must be >= 0, got {self.tail}")
+
+    @abstractmethod
+    def phase(self, t: np.ndarray) -> np.ndarray:
+        """Phase (rad) at times ``t`` during the sweep."""
+
+    @abstractmethod
+    def phase_expression(self, ops, t):
+        """The phase as an expression of time ``t`` (``ops``:
+        :func:`sensfw.models.contact.symbolic_ops` for Exudyn, or numpy)."""
+
+    @abstractmethod
+    def frequency(self, t: np.ndarray) -> np.ndarray:
+        """Instantaneous frequency (Hz) at times ``t`` during the sweep."""
+
+    def force(self, t: np.ndarray | None = None) -> np.ndarray:
+        t = self.time() if t is None else np.asarray(t, dtype=float)
+        return np.where(t < self.duration, self.amplitude * np.sin(self.phase(t)), 0.0)
+
+    def force_expression(self, ops, t):
+        """The force as an expression of time ``t`` for a model's load function, zero after
+        the sweep."""
+        return ops.where(t < self.duration, self.amplitude * ops.sin(self.phase_expression(ops, t)),
+                         0.0)
+
+    def f_inst(self, t: np.ndarray | None = None) -> np.ndarray:
+        """Instantaneous frequency; held at ``f1`` during the tail."""
+        t = self.time() if t is None else np.asarray(t, dtype=float)
+        return self.frequency(np.minimum(t, self.duration))
+
+
+@dataclass(frozen=True)
+class Chirp(Sweep):
+    """The excitation of a study: a log chirp (the exponential sweep of the module docstring),
+    optionally followed by a silent tail.
+
+    ``tail`` seconds of zero force after the sweep let the last resonances ring down inside
+    the record, so that FRF and order analysis see the whole response.
+    """
+
+    kind: ClassVar[str] = "log_chirp"
 
     @property
     def k(self) -> float:
         """Sweep rate ``ln(f1/f0)/T`` of Eq. 17, 1/s."""
         return float(np.log(self.f1 / self.f0) / self.duration)
 
-    def force(self, t: np.ndarray | None = None) -> np.ndarray:
-        t = self.time() if t is None else np.asarray(t, dtype=float)
-        f = self.amplitude * np.sin(chirp_phase(t, self.f0, self.f1, self.duration))
-        return np.where(t < self.duration, f, 0.0)
+    def phase(self, t):
+        return chirp_phase(t, self.f0, self.f1, self.duration)
 
-    def force_expression(self, ops, t):
-        """The force as an expression of time ``t`` for a model's load function (``ops``:
-        :func:`sensfw.models.contact.symbolic_ops` for Exudyn, or numpy), zero after the
-        sweep."""
+    def phase_expression(self, ops, t):
         k = self.k
-        phase = (2.0 * math.pi * self.f0 / k) * (ops.exp(k * t) - 1.0)
-        return ops.where(t < self.duration, self.amplitude * ops.sin(phase), 0.0)
+        return (2.0 * math.pi * self.f0 / k) * (ops.exp(k * t) - 1.0)
 
-    def f_inst(self, t: np.ndarray | None = None) -> np.ndarray:
-        """Instantaneous frequency; held at ``f1`` during the tail."""
-        t = self.time() if t is None else np.asarray(t, dtype=float)
-        return chirp_frequency(np.minimum(t, self.duration), self.f0, self.f1, self.duration)
+    def frequency(self, t):
+        return chirp_frequency(t, self.f0, self.f1, self.duration)
 
     def to_dict(self) -> dict[str, float]:
         out = asdict(self)  # no "kind": the paper's chirp keeps the run hashes it had
@@ -201,37 +227,21 @@ class Chirp(Excitation):
 
 
 @dataclass(frozen=True)
-class LinearSweep(Excitation):
+class LinearSweep(Sweep):
     """Linear sine sweep: ``phase = 2 pi (f0 t + (f1 - f0) t^2 / (2 T))``, frequency
     ``f0 + (f1 - f0) t / T``."""
 
     kind: ClassVar[str] = "linear_sweep"
-    closed_form: ClassVar[bool] = True
-    f0: float = 50.0
-    f1: float = 5000.0
-    duration: float = 1.0
-    fs: float = 20000.0
-    amplitude: float = 1.0
-    tail: float = 0.0
-    signal_unit: str = "N"
 
-    def __post_init__(self) -> None:
-        _check_sweep(self.f0, self.f1, self.duration, self.fs)
-
-    def _phase(self, t, ops=np):
+    def phase(self, t):
         rate = (self.f1 - self.f0) / self.duration
         return 2.0 * math.pi * (self.f0 * t + 0.5 * rate * t * t)
 
-    def force(self, t: np.ndarray | None = None) -> np.ndarray:
-        t = self.time() if t is None else np.asarray(t, dtype=float)
-        return np.where(t < self.duration, self.amplitude * np.sin(self._phase(t)), 0.0)
+    def phase_expression(self, ops, t):
+        return self.phase(t)
 
-    def force_expression(self, ops, t):
-        return ops.where(t < self.duration, self.amplitude * ops.sin(self._phase(t, ops)), 0.0)
-
-    def f_inst(self, t: np.ndarray | None = None) -> np.ndarray:
-        t = self.time() if t is None else np.asarray(t, dtype=float)
-        return self.f0 + (self.f1 - self.f0) * np.minimum(t, self.duration) / self.duration
+    def frequency(self, t):
+        return self.f0 + (self.f1 - self.f0) * t / self.duration
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ lead (first) member; the other members follow through the coded value
 ``c = (x - mid) / half_range`` in [-1, 1], so at the variable's min all members sit at their
 min, at the mid-point all at their mid-points (the "medium value" of Table 2).
 
-Values are in the paper's units (N, mm, s); models convert internally.
+Values are in the paper's units (N, mm, s); models convert internally (:data:`MM`).
 """
 
 from __future__ import annotations
@@ -21,6 +21,9 @@ import numpy as np
 import pandas as pd
 
 from .errors import ParameterError
+
+#: metres per millimetre: parameters come in the paper's mm, models compute in SI
+MM = 1e-3
 
 
 @dataclass(frozen=True)

@@ -2,15 +2,14 @@
 
 The paper's three steps are the default study (``studies/paper.toml``): an OAT screen scored
 by the FRF scalar selects variables, a 3-level full factorial on them is scored by order
-amplitudes and THD, and Eq. 18 is fitted to each score. Everything a report needs is kept in
-:class:`StageResult`; :func:`results_json` turns the study into the machine-readable summary.
+amplitudes and THD, and Eq. 18 is fitted to each score. :func:`run_study` writes the output
+folder that :func:`load_result` reads back; the results themselves (:class:`StageResult`,
+:func:`results_json`) are in :mod:`sensfw.results`.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -20,41 +19,16 @@ from .errors import AnalysisError, SensfwError
 from .evaluate import evaluate, make_scorers, needs_reference, reference_spec
 from .models.base import Signals
 from .params import DesignSpace
+from .results import (  # noqa: F401  (jsonable, results_json: the results' names, here too)
+    StageResult,
+    StudyResult,
+    jsonable,
+    keep_study_file,
+    results_json,
+    write_result,
+)
 from .runs import RunCounts, RunStore
 from .study import StageSpec, Study
-
-
-@dataclass
-class StageResult:
-    """Everything one stage produced."""
-
-    spec: StageSpec
-    space: DesignSpace
-    table: pd.DataFrame  # physical design-variable values, index = run labels
-    keys: list[str]  # run key of each row
-    scores: pd.DataFrame  # rows = run labels, columns = scorer labels (NaN = failed)
-    reference_key: str | None = None
-    screening: object | None = None  # the design's analysis (ScreeningResult)
-    selected: list[str] | None = None
-    surrogates: dict[str, dict[str, object]] = field(default_factory=dict)  # label -> name -> est
-    regression: dict[str, dict] = field(default_factory=dict)
-    validation: dict[str, dict] = field(default_factory=dict)
-    failed: dict[str, str] = field(default_factory=dict)  # run label -> error
-    notes: list[str] = field(default_factory=list)
-
-    @property
-    def name(self) -> str:
-        return self.spec.name
-
-
-@dataclass
-class StudyResult:
-    """A study's stages with the run store they read (``store``) and the run counts."""
-
-    study: Study
-    stages: list[StageResult]
-    store: RunStore
-    counts: RunCounts
 
 
 def stage_variables(study: Study, stage: StageSpec, done: dict[str, StageResult]) -> list[str]:
@@ -74,37 +48,35 @@ def _select(stage: StageSpec, screening, scores: pd.DataFrame) -> list[str]:
     return list(screening.select(threshold=sel.threshold, max_variables=sel.max_variables))
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        x = float(x)
-        return x if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, pd.DataFrame):
-        return _jsonable(x.to_dict(orient="records"))
-    if isinstance(x, pd.Series):
-        return _jsonable(x.to_dict())
-    return x
-
-
-def _init_params(name: str) -> set[str]:
-    import inspect
-
+def _declared_options(name: str) -> set[str]:
+    """The options surrogate ``name`` declares (:func:`sensfw.options.options_model`)."""
+    from .options import options_model
     from .plugins import surrogates
 
-    return set(inspect.signature(surrogates.get(name)).parameters)
+    return set(options_model(surrogates.get(name)).model_fields)
+
+
+def _stored_validation(stored: dict | None, est, X) -> dict | None:
+    """``stored`` (a surrogate's validation from an earlier ``results.json``) if it is the
+    validation of ``est``: its fitted values are ``est``'s predictions at ``X`` (a changed
+    option or score gives others), else None."""
+    if not stored or "fitted" not in stored:
+        return None
+    fitted = np.asarray([np.nan if v is None else v for v in stored["fitted"]], float)
+    pred = np.asarray(est.predict(X), float)
+    if fitted.shape != pred.shape or not np.allclose(fitted, pred, rtol=1e-9, atol=1e-12):
+        return None
+    return dict(stored)
 
 
 def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd.DataFrame,
-                   scores: pd.DataFrame, result: StageResult) -> None:
+                   scores: pd.DataFrame, result: StageResult,
+                   validated: dict | None = None) -> None:
     """Fit every requested surrogate to every score; Eq. 18 statistics go to ``regression``,
-    the validation of every surrogate to ``validation``."""
+    the validation of every surrogate to ``validation``. ``validated`` (score label ->
+    surrogate -> validation, from an earlier ``results.json``) is taken instead of validating
+    again where it belongs to the same fit (:func:`_stored_validation`): cross-validation
+    refits a surrogate k (and up to n) times, and ``auto`` chooses again in every refit."""
     from .analysis.validation import validate
     from .surrogates import make_surrogate
 
@@ -120,7 +92,7 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
         result.validation[label] = {}
         for sur in stage.surrogates:
             name, opts = sur.key, sur.options()
-            if "bounds" in _init_params(sur.name) and "bounds" not in opts:
+            if "bounds" in _declared_options(sur.name) and "bounds" not in opts:
                 opts["bounds"] = [bounds[n] for n in space.names]
             try:
                 est = make_surrogate(sur.name, **opts).fit(X, y[ok])
@@ -128,7 +100,9 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                 result.notes.append(f"{label}/{name}: {err}")
                 continue
             result.surrogates[label][name] = est
-            result.validation[label][name] = validate(est, X, y[ok], seed=study.spec.study.seed)
+            stored = _stored_validation((validated or {}).get(label, {}).get(name), est, X)
+            result.validation[label][name] = stored or validate(est, X, y[ok],
+                                                                seed=study.spec.study.seed)
             if est.summary_ is not None and est.coefficient_table_ is not None \
                     and label not in result.regression:
                 result.regression[label] = {
@@ -136,9 +110,9 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
                     "options": {k: v for k, v in opts.items() if k != "bounds"},
                     **{k: est.summary_.get(k) for k in ("r2", "r2_adj", "q2", "f_stat",
                                                         "f_pvalue", "n_obs")},
-                    "coefficients": _jsonable(
+                    "coefficients": jsonable(
                         est.coefficient_table_[["term", "estimate", "se", "t", "p"]]),
-                    "coefficients_coded": _jsonable(
+                    "coefficients_coded": jsonable(
                         est.coefficient_table_coded_[["term", "estimate", "se", "t", "p"]]),
                 }
 
@@ -172,11 +146,12 @@ def confirm(study: Study, stage: StageSpec, space: DesignSpace, runner,
 
 
 def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResult],
-              known: dict | None = None) -> StageResult:
+              known: dict | None = None, validated: dict | None = None) -> StageResult:
     """One stage: :func:`~sensfw.evaluate.evaluate` its design, then the design's analysis
     (screening and selection) or the surrogates (+ confirmation runs). ``runner`` is a
     :class:`~sensfw.runs.Runner` or a :class:`~sensfw.runs.StoredRuns`; ``known`` holds
-    scores by run key from an earlier ``results.json``."""
+    scores by run key and ``validated`` the stage's surrogate validation
+    (:func:`fit_surrogates`) from an earlier ``results.json``."""
     from .designs import make_design
 
     variables = stage_variables(study, stage, done)
@@ -204,26 +179,66 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
         except SensfwError as err:
             result.notes.append(f"analysis of {stage.design}: {err}")
     if stage.surrogates:
-        fit_surrogates(study, stage, space, table, scores, result)
+        fit_surrogates(study, stage, space, table, scores, result, validated)
         if stage.confirmation_runs:
             confirm(study, stage, space, runner, result, scorers, ev.reference)
     return result
 
 
-def run_study(study: Study, runner, log: Callable[[str], None] = lambda s: None,
-              known: dict | None = None) -> StudyResult:
-    """Every stage in order; ``runner`` a :class:`~sensfw.runs.Runner` (or
-    :class:`~sensfw.runs.StoredRuns` to rebuild without simulating)."""
-    done: dict[str, StageResult] = {}
-    stages = []
-    for stage in study.stages:
-        log(f"stage {stage.name}: design {stage.design}")
-        res = run_stage(study, stage, runner, done, known)
-        done[stage.name] = res
-        stages.append(res)
-        if res.selected is not None:
-            log(f"stage {stage.name}: selected {', '.join(res.selected) or '(none)'}")
-    return StudyResult(study=study, stages=stages, store=runner.store, counts=runner.counts)
+def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: None,
+              known: dict | None = None, *, out: str | Path | None = None,
+              report: bool = True, validated: dict | None = None) -> StudyResult:
+    """Every stage in order.
+
+    Parameters
+    ----------
+    runner
+        A :class:`~sensfw.runs.Runner` (or :class:`~sensfw.runs.StoredRuns` to rebuild
+        without simulating); default, with ``out``: a runner on the run store ``out/runs``
+        with the study's ``[execution]`` settings, closed at the end.
+    out : path, optional
+        The output folder to write, the one :func:`load_result` reads back: the study file
+        (``study.toml``) before anything runs, then ``results.json``, ``timing.json`` and,
+        with ``report``, ``report.html`` (:func:`write_result`).
+    known : dict, optional
+        Scores by run key from an earlier ``results.json``
+        (:func:`~sensfw.evaluate.score_runs`).
+    validated : dict, optional
+        Surrogate validation by stage name from an earlier ``results.json``
+        (:func:`fit_surrogates`).
+    """
+    import time
+
+    from .runs import Runner, RunStore
+
+    own = runner is None
+    if own:
+        if out is None:
+            raise SensfwError("run_study needs a runner or an output folder (out=)")
+        ex = study.spec.execution
+        runner = Runner(store=RunStore(Path(out) / "runs"), backend=ex.backend,
+                        workers=ex.workers, scheduler=ex.scheduler)
+    if out is not None:
+        keep_study_file(study, out)
+    t0 = time.perf_counter()
+    try:
+        done: dict[str, StageResult] = {}
+        stages = []
+        for stage in study.stages:
+            log(f"stage {stage.name}: design {stage.design}")
+            res = run_stage(study, stage, runner, done, known,
+                            (validated or {}).get(stage.name))
+            done[stage.name] = res
+            stages.append(res)
+            if res.selected is not None:
+                log(f"stage {stage.name}: selected {', '.join(res.selected) or '(none)'}")
+    finally:
+        if own:
+            runner.close()
+    result = StudyResult(study=study, stages=stages, store=runner.store, counts=runner.counts)
+    if out is not None:
+        write_result(result, out, report=report, wall=time.perf_counter() - t0)
+    return result
 
 
 def load_result(out_dir: str | Path) -> StudyResult:
@@ -231,7 +246,8 @@ def load_result(out_dir: str | Path) -> StudyResult:
     simulating: the study file copied there (``study.toml``, else the path recorded in
     ``results.json``), the run store ``runs/`` and the scores in ``results.json``. Designs
     are regenerated (deterministic for the study's seed), analyses and surrogates refitted
-    to the stored scores; confirmation runs are scored from the store."""
+    to the stored scores (their validation is taken from ``results.json`` where it belongs
+    to the same fit); confirmation runs are scored from the store."""
     import json
 
     from .runs import StoredRuns
@@ -252,8 +268,9 @@ def load_result(out_dir: str | Path) -> StudyResult:
         for r in st.get("runs", []):
             known[r["key"]] = {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
                                if r["label"] in v}
+    validated = {st["name"]: st["validation"] for st in stages if "validation" in st}
     runs = StoredRuns(RunStore(out / "runs"), RunCounts(**data.get("runs", {})))
-    return run_study(study, runs, known=known)
+    return run_study(study, runs, known=known, validated=validated)
 
 
 def plan(study: Study) -> list[dict]:
@@ -288,43 +305,3 @@ def plan(study: Study) -> list[dict]:
     return out
 
 
-def run_step(store: RunStore, key: str) -> dict:
-    """The time step a stored run used, what set it, and the integrator (adaptive runs: at
-    most ``step``, with ``mean_step``); ``{}`` for models without one."""
-    rec = store.record(key) or {}
-    return {k: rec[k] for k in ("step", "step_limited_by", "integrator", "mean_step")
-            if k in rec}
-
-
-def results_json(res: StudyResult) -> dict:
-    """The machine-readable summary (``results.json``); deterministic for identical runs."""
-    stages = []
-    for st in res.stages:
-        entry: dict = {
-            "name": st.name, "design": st.spec.design, "n_runs": len(st.table),
-            "variables": st.space.names,
-            "runs": [{"label": lab, "key": key, **{v: float(st.table.loc[lab, v])
-                                                    for v in st.space.names},
-                      **run_step(res.store, key)}
-                     for lab, key in zip(st.table.index, st.keys, strict=True)],
-            "failed": st.failed,
-            "scores": {c: st.scores[c].to_dict() for c in st.scores.columns},
-        }
-        if st.reference_key is not None:
-            entry["reference_key"] = st.reference_key
-        if st.screening is not None:
-            entry["importance"] = st.screening.importance.to_dict()
-            entry["analysis"] = _jsonable(st.screening.table.reset_index())
-        if st.selected is not None:
-            entry["sensitivity"] = st.screening.importance.to_dict()
-            entry["selected"] = list(st.selected)
-        if st.regression:
-            entry["regression"] = st.regression
-        if st.validation:
-            entry["validation"] = st.validation
-        if st.notes:
-            entry["notes"] = st.notes
-        stages.append(entry)
-    source = str(Path(res.study.source).resolve()) if res.study.source else None
-    return _jsonable({"study": res.study.name, "study_file": source,
-                      "runs": res.counts.as_dict(), "stages": stages})

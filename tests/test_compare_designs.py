@@ -41,6 +41,27 @@ def test_compare_designs_writes_table_and_plot(quick, cli):
     assert "sensfw study report" in (out / "report.html").read_text()
 
 
+def test_bad_options_are_reported_before_anything_runs():
+    """Every design and the reference surrogate are built with their options before the
+    reference run: a bad --option costs no simulation, and every problem is named."""
+    from sensfw.errors import OptionError
+
+    class NoRuns:
+        def run(self, *args, **kwargs):
+            raise AssertionError("a run was started")
+
+    study = Study.load(ROOT / "studies" / "quick.toml")
+    with pytest.raises(OptionError) as info:
+        compare_designs(study, NoRuns(), ["oat", "morris", "morriss"],
+                        {"morris": {"trajectories": 1}, "oat": {"combine": "median"}},
+                        reference_surrogate="gp")
+    got = dict(info.value.problems)
+    assert got["morris.trajectories"] == "trajectories must be an integer >= 2, got 1"
+    assert got["oat.combine"].startswith("combine must be 'max', 'mean' or 'sum'")
+    assert got["morriss"].startswith("unknown design 'morriss'")
+    assert got["reference_surrogate"].startswith("unknown surrogate 'gp'")
+
+
 ISHIGAMI = {"study": {"name": "ishigami", "seed": 1}, "model": {"name": "ishigami"},
             "execution": {"backend": "serial"},
             "stages": [{"name": "screen", "design": "sobol", "scorers": [{"name": "value"}],

@@ -171,3 +171,63 @@ def test_eq18_matches_an_independent_statsmodels_formula_fit(quick):
         np.testing.assert_allclose(ours, direct.params.to_numpy(), rtol=1e-6)
         np.testing.assert_allclose(direct.fittedvalues, fit.fittedvalues, rtol=0,
                                    atol=1e-8 * np.max(np.abs(y)))
+
+
+LIBRARY_STUDY = {
+    "study": {"name": "library", "seed": 2},
+    "model": {"name": "sensfw_test_models:NoisyQuadratic", "options": {"noise": 0.05}},
+    "execution": {"backend": "serial"},
+    "stages": [
+        {"name": "screen", "design": "oat", "scorers": [{"name": "value", "label": "y"}],
+         "select": {"threshold": 0.05, "max_variables": 2}},
+        {"name": "doe", "design": "full_factorial", "variables": "selected:screen",
+         "scorers": [{"name": "value", "label": "y"}], "surrogates": ["eq18"]},
+    ],
+}
+
+
+def test_run_study_writes_the_folder_load_result_reads(tmp_path):
+    """The library writes what `sensfw run` writes (issue 26, item 3): run_study(out=DIR)
+    leaves the study file, results.json, timing.json and the report, and load_result
+    rebuilds the same stages from them without simulating."""
+    from sensfw.pipeline import load_result, results_json, run_study
+    from sensfw.study import Study
+
+    study = Study.from_dict(LIBRARY_STUDY)  # no file: study.toml is written from the spec
+    result = run_study(study, out=tmp_path, report=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.json", "runs",
+                                                          "study.toml", "timing.json"]
+    written = json.loads((tmp_path / "results.json").read_text())
+    assert written == json.loads(json.dumps(results_json(result)))
+    # y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3 (+ noise 0.05): one at a time over [-1, 1],
+    # x1 moves y by up to 2.5, x2 by 2, x3 not at all; then 3^2 DoE runs on x1, x2
+    assert written["stages"][0]["selected"] == ["x1", "x2"]
+    assert written["stages"][1]["n_runs"] == 9
+    # the DoE's centre and its four points on the axes are OAT runs, taken from the store
+    assert json.loads((tmp_path / "timing.json").read_text())["runs"]["new"] == 7 + 9 - 5
+    again = load_result(tmp_path)  # StoredRuns: would raise on a missing run
+    assert json.loads(json.dumps(results_json(again)))["stages"] == written["stages"]
+
+
+def test_a_rebuild_takes_the_stored_validation_of_the_same_fit(tmp_path, monkeypatch):
+    """`sensfw report` does not cross-validate again (issue 26, item 6): each surrogate's
+    validation comes from results.json when its fitted values are the refitted surrogate's
+    predictions; a validation of another fit is not taken."""
+    import sensfw.analysis.validation
+    from sensfw.pipeline import load_result, run_study
+    from sensfw.study import Study
+
+    run_study(Study.from_dict(LIBRARY_STUDY), out=tmp_path, report=False)
+    written = json.loads((tmp_path / "results.json").read_text())
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("validated again")
+
+    monkeypatch.setattr(sensfw.analysis.validation, "validate", refuse)
+    again = load_result(tmp_path)
+    stored = written["stages"][1]["validation"]["y"]["eq18"]
+    assert again.stages[1].validation["y"]["eq18"] == stored
+    written["stages"][1]["validation"]["y"]["eq18"]["fitted"][0] += 1.0  # another fit's
+    (tmp_path / "results.json").write_text(json.dumps(written))
+    with pytest.raises(AssertionError, match="validated again"):
+        load_result(tmp_path)

@@ -120,7 +120,7 @@ def bad_option(draw):
         v = draw(st.one_of(st.text(max_size=8), st.integers(), st.none())
                  .filter(lambda x: x not in ("product", "ratio")))
         return _set("stages", 1, "surrogates", 0, value={"name": "eq18", "interaction": v}), \
-            "stages[1].surrogates[0].interaction", "The 'interaction' parameter of Eq18"
+            "stages[1].surrogates[0].interaction", "interaction must be 'product' or 'ratio'"
     key = draw(names.filter(lambda k: k not in ("name", "label", "interaction", "coding",
                                                 "bounds", "log_features", "log_response")))
     return _set("stages", 1, "surrogates", 0, value={"name": "eq18", key: 1}), \

@@ -24,9 +24,20 @@ def problems(data) -> dict[str, str]:
 
 
 def test_shipped_studies_are_valid():
-    for name in ("quick", "paper"):
-        study = Study.load(ROOT / "studies" / f"{name}.toml")
-        assert study.parameters is not None
+    """Each shipped study loads with what its file says: the quick study's five screened
+    variables and the calibration it names; Table 1 in the paper's."""
+    quick = Study.load(ROOT / "studies" / "quick.toml")
+    assert quick.stages[0].variables == ["slide_stiffness", "slide_damping",
+                                         "slide_friction_velocity", "bearing_preload",
+                                         "spring_damping"]
+    assert quick.excitation.duration == 0.25 and quick.excitation.tail == 0.02
+    assert quick.spec.calibration.parameters == ["slide_stiffness", "slide_friction_velocity",
+                                                 "slide_damping"]
+    # the model's 21 parameters, nominal values as the model declares them (no overrides)
+    assert quick.parameters.nominal() == quick.model.parameters().nominal()
+    assert len(quick.parameters) == 21
+    bert = Study.load(ROOT / "studies" / "bert.toml")
+    assert bert.gain.unit == "N/V" and "excitation_gain" in bert.parameters
     paper = Study.load(ROOT / "studies" / "paper.toml")
     assert len(paper.variable_names()) == 19  # Table 1: 21 parameters, two pairs grouped
     assert paper.parameters["clutch_drive_stiffness"].nominal == pytest.approx(3.14e6)
@@ -90,13 +101,22 @@ def test_stage_references_and_channels_are_checked():
     assert "unknown design variable 'slide_dampin'" in got["stages[0].variables"]
 
 
-def test_unknown_effect_in_model_options():
+def test_model_options_and_effects_are_reported_at_their_paths():
+    """Every problem of the model's options at once, each effect's at its index."""
     data = copy.deepcopy(QUICK)
-    data["model"]["options"] = {"effects": [{"name": "flexible_mood"}]}
+    data["model"]["options"] = {"effects": [{"name": "flexible_mood"}, "added_mass",
+                                            {"name": "clearance", "attach": "moon"},
+                                            {"name": "damping", "at": "bearing_l1"}],
+                                "linearised": "no"}
     got = problems(data)
-    assert "unknown effect 'flexible_mood'; available:" in got["model.options"]
-    data["model"]["options"] = {"effects": [{"name": "clearance", "attach": "moon"}]}
-    assert "cannot attach to 'moon'" in problems(data)["model.options"]
+    assert "unknown effect 'flexible_mood'; available:" in got["model.options.effects[0].name"]
+    assert "cannot attach to 'moon'" in got["model.options.effects[2].attach"]
+    assert got["model.options.effects[3].at"] == "unknown option; known: attach"
+    assert got["model.options.linearised"] == "linearised must be true or false, got 'no'"
+    assert "model.options.effects[1].attach" not in got  # the model's preferred place
+    data["model"]["options"] = {"colour": "red"}
+    assert problems(data) == {"model.options.colour":
+                              "unknown option; known: effects, geometry, linearised"}
 
 
 def test_automatic_step_only_with_the_integrators_it_is_calibrated_for():
@@ -184,13 +204,14 @@ def test_plugin_options_are_checked_before_anything_runs():
                                        {"name": "gaussian_process", "noise": "yes",
                                         "n_restarts_optimizer": -1}]
     got = problems(data)
-    assert got["stages[1].design_options.levelz"] == "unknown option; known: levels"
+    assert got["stages[1].design_options.levelz"] == "unknown option; known: centre, levels"
     assert "fmin < fmax" in got["stages[0].scorers[0].band"]
     assert "unit must be 'percent' or 'dBc'" in got["stages[1].scorers[2].unit"]
     assert "'product'" in got["stages[1].surrogates[0].interaction"]
     assert "'bogus'" in got["stages[1].surrogates[0].interaction"]
-    assert "bool" in got["stages[1].surrogates[1].noise"]
-    assert "range [0, inf)" in got["stages[1].surrogates[1].n_restarts_optimizer"]
+    assert got["stages[1].surrogates[1].noise"] == "noise must be true or false, got 'yes'"
+    assert got["stages[1].surrogates[1].n_restarts_optimizer"] == \
+        "n_restarts_optimizer must be an integer >= 0, got -1"
     assert len(got) == 6
 
 
@@ -211,8 +232,8 @@ def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space()
     data["stages"][0]["design_options"] = {"trajectories": 3, "optimal_trajectories": 5}
     data["stages"][1]["surrogates"] = [{"name": "eq18", "interaction": "ratio"}]
     got = problems(data)
-    assert "optimal_trajectories must be an integer in [2, trajectories)" in \
-        got["stages[0].design_options"]
+    assert got["stages[0].design_options.optimal_trajectories"] == \
+        "optimal_trajectories must be an integer in [2, trajectories) = [2, 3), got 5"
     assert "coding='physical'" in got["stages[1].surrogates[0].interaction"]
     data = copy.deepcopy(QUICK)
     data["stages"][0]["design"] = "box_behnken"
@@ -231,7 +252,7 @@ def test_cli_validate_reports_bad_options(tmp_path):
                           capture_output=True, text=True, timeout=120,
                           env={**os.environ, "COLUMNS": "200"})
     assert proc.returncode == 2
-    assert "stages[1].design_options.levelz: unknown option; known: levels" in proc.stderr
+    assert "stages[1].design_options.levelz: unknown option; known: centre, levels" in proc.stderr
     assert "stages[1].surrogates[0].interaction" in proc.stderr
     assert "Traceback" not in proc.stderr
 

@@ -8,7 +8,7 @@ import pytest
 
 from sensfw.plugins import effects
 from sensfw.study import Study
-from sensfw.studyfile import add_effect
+from sensfw.study.edit import add_effect
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = (ROOT / "studies" / "quick.toml").read_text(encoding="utf-8")

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import kendalltau
 
-from ..errors import AnalysisError
+from ..errors import AnalysisError, OptionError
 from ..runs import Runner
 from ..study import Study
 
@@ -29,19 +29,57 @@ def _simulation_seconds(runner: Runner, keys: Sequence[str]) -> float:
     return total
 
 
+def build_comparison(study: Study, designs: Sequence[str], options: dict[str, dict],
+                     reference_runs: int | None, reference_surrogate: str) -> dict:
+    """Every plugin a comparison uses, built with its options before anything runs: the
+    designs, the reference Latin hypercube and the reference surrogate. Every problem is
+    reported at once, at the name it has on the command line (``morris.trajectories``,
+    ``reference_surrogate``), in one :class:`~sensfw.errors.OptionError`."""
+    from ..pipeline import stage_variables
+    from ..plugins import designs as design_registry
+    from ..plugins import surrogates
+    from ..study.checks import plugin_problems
+
+    stage = study.stages[0]
+    space = study.space(stage, stage_variables(study, stage, {}))
+    problems = [(f"{name}", f"options for a design that is not compared ({', '.join(designs)})")
+                for name in options if name not in designs]
+    made = {}
+    for name in designs:
+        made[name], found = plugin_problems(design_registry, name, options.get(name, {}), name)
+        problems += found
+    n_ref = reference_runs or 10 * len(space)
+    lhs, found = plugin_problems(design_registry, "lhs", {"samples": n_ref}, "reference_runs")
+    if found:
+        problems.append(("reference_runs", f"reference_runs must be an integer >= 2, got "
+                                           f"{n_ref!r}"))
+    opts = {"bounds": [(v.low, v.high) for v in space.variables]}
+    if reference_surrogate == "gaussian_process":
+        opts["log_features"] = "auto"  # factor-10 ranges vary evenly per decade
+    sur, found = plugin_problems(surrogates, reference_surrogate, opts, "reference_surrogate")
+    problems += found
+    if problems:
+        lines = "\n".join(f"  {path}: {msg}" for path, msg in problems)
+        raise OptionError(f"compare-designs: {len(problems)} problem(s) of its options:\n"
+                          f"{lines}", option=problems[0][0], problems=problems)
+    return {"stage": stage, "space": space, "designs": made, "lhs": lhs,
+            "surrogate": sur, "bounds": opts["bounds"]}
+
+
 def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
                     options: dict[str, dict] | None = None, reference_runs: int | None = None,
                     reference_surrogate: str = "gaussian_process", top_k: int | None = None,
                     log=lambda s: None) -> dict:
+    """Each of ``designs`` (with ``options`` by design name) on the study's first stage,
+    against the reference ranking (:func:`build_comparison` checks them all before the
+    first simulation)."""
     from ..analysis.sobol import sobol_indices
     from ..analysis.validation import validate
     from ..evaluate import evaluate, make_scorers, needs_reference, reference_spec
-    from ..pipeline import stage_variables
-    from ..surrogates import make_surrogate
 
     options = options or {}
-    stage = study.stages[0]
-    space = study.space(stage, stage_variables(study, stage, {}))
+    built = build_comparison(study, designs, options, reference_runs, reference_surrogate)
+    stage, space, bounds = built["stage"], built["space"], built["bounds"]
     scorers = make_scorers(study, stage)
     label = (stage.select.by if stage.select and stage.select.by else stage.scorers[0].key)
     scorers = {label: scorers[label]}
@@ -58,18 +96,13 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
         reference = res.signals
 
     # the reference ranking: Sobol' total indices of a surrogate on a large LHS
-    n_ref = reference_runs or 10 * k
-    log(f"reference: lhs with {n_ref} runs + {reference_surrogate}")
-    ev = evaluate(study, space, "lhs", runner, scorers, reference, options={"samples": n_ref},
-                  label="reference lhs")
+    lhs = built["lhs"]
+    log(f"reference: lhs with {lhs.n_runs(space)} runs + {reference_surrogate}")
+    ev = evaluate(study, space, lhs, runner, scorers, reference, label="reference lhs")
     table, keys, failed = ev.table, ev.keys, ev.failed
     y = ev.scores[label].to_numpy(float)
     ok = np.isfinite(y)
-    bounds = [(v.low, v.high) for v in space.variables]
-    opts = {"bounds": bounds}
-    if reference_surrogate == "gaussian_process":
-        opts["log_features"] = "auto"  # factor-10 ranges vary evenly per decade
-    sur = make_surrogate(reference_surrogate, **opts).fit(table.loc[ok], y[ok])
+    sur = built["surrogate"].fit(table.loc[ok], y[ok])
     quality = validate(sur, table.loc[ok], y[ok], seed=study.spec.study.seed)
     sob = sobol_indices(sur, bounds, space.names, n=1024, seed=study.spec.study.seed)
     ref_imp = sob["ST"].clip(lower=0)
@@ -85,8 +118,8 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
     rows = []
     for name in designs:
         log(f"design {name}")
-        ev = evaluate(study, space, name, runner, scorers, reference,
-                      options=options.get(name, {}), label=name)
+        ev = evaluate(study, space, built["designs"][name], runner, scorers, reference,
+                      label=name)
         table, keys, failed, wall = ev.table, ev.keys, ev.failed, ev.wall
         res = ev.design.analyze(space, table, ev.scores[label].to_numpy(float))
         imp = res.importance.reindex(space.names).fillna(0.0)

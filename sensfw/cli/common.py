@@ -118,9 +118,9 @@ def _running(study, out_dir: Path, workers, backend, scheduler, progress, read_a
 
 
 def _json(path: Path, data) -> None:
-    from ..pipeline import _jsonable
+    from ..results import jsonable
 
-    path.write_text(json.dumps(_jsonable(data), indent=1))
+    path.write_text(json.dumps(jsonable(data), indent=1))
 
 
 Measured = Annotated[list[Path], typer.Option("--measured", "-m",

@@ -40,7 +40,7 @@ def run(
     progress: ShowProgress = True,
 ) -> None:
     """Run a study: screen, design of experiments, Eq. 18 regression, report."""
-    from ..pipeline import plan, results_json, run_study
+    from ..pipeline import plan, run_study
     from ..study import Study
 
     study = Study.load(study_file)
@@ -56,44 +56,24 @@ def run(
         out.print(table)
         out.print(f"at most {total} runs (+1 nominal reference); cached runs are not recomputed")
         return
-    out_dir.mkdir(parents=True, exist_ok=True)
-    _keep_study_file(study_file, out_dir)
     runner = _runner(study, out_dir, workers, backend, scheduler, retry_failed, progress)
     t0 = time.perf_counter()
     try:
-        result = run_study(study, runner, log=say)
+        result = run_study(study, runner, log=say, out=out_dir, report=report)
     finally:
         runner.progress.close()
         runner.close()
-    data = results_json(result)
-    (out_dir / "results.json").write_text(json.dumps(data, indent=1, sort_keys=False))
-    (out_dir / "timing.json").write_text(json.dumps(
-        {"wall_s": time.perf_counter() - t0, "runs": runner.counts.as_dict()}, indent=1))
-    if report:
-        from ..report.study import write_study_report
-
-        write_study_report(result, out_dir / "report.html")
     c = runner.counts
     out.print(f"study {study.name!r}: {c.total} runs ({c.new} new, {c.cached} cached, "
               f"{c.failed} failed) in {time.perf_counter() - t0:.1f} s -> {out_dir}")
-    for st in data["stages"]:
-        if "selected" in st:
-            out.print(f"  {st['name']}: selected {', '.join(st['selected'])}")
-        for label, per in st.get("validation", {}).items():
+    for st in result.stages:
+        if st.selected is not None:
+            out.print(f"  {st.name}: selected {', '.join(st.selected)}")
+        for label, per in st.validation.items():
             for name, v in per.items():
                 adj = "n/a" if v.get("r2_adj") is None else f"{v['r2_adj']:.3f}"
-                out.print(f"  {st['name']}: {label} / {name}: R2adj={adj} "
-                          f"Q2(LOO)={v['q2_loo']:.3f}")
-
-
-def _keep_study_file(study_file: Path, out_dir: Path) -> None:
-    """Copy the study file into the output folder (``study.toml``), so that the folder
-    alone rebuilds its report (``sensfw report DIR``)."""
-    import shutil
-
-    target = out_dir / "study.toml"
-    if not target.exists() or not target.samefile(study_file):
-        shutil.copyfile(study_file, target)
+                q2 = "n/a" if v.get("q2_loo") is None else f"{v['q2_loo']:.3f}"
+                out.print(f"  {st.name}: {label} / {name}: R2adj={adj} Q2(LOO)={q2}")
 
 
 @app.command()
@@ -131,15 +111,12 @@ def compare_designs_cmd(
     progress: ShowProgress = True,
 ) -> None:
     """Compare design strategies on the study's screening stage against a Sobol' reference."""
-    from ..analysis.compare_designs import agreement_table, compare_designs
-    from ..plugins import designs as registry
+    from ..analysis.compare_designs import agreement_table, build_comparison, compare_designs
     from ..report.measure import write_designs_report
     from ..study import Study
 
     study = Study.load(study_file)
     names = [d.strip() for d in designs.split(",") if d.strip()]
-    for n in names:
-        registry.get(n)
     opts: dict[str, dict] = {}
     for item in option or []:
         key, sep, val = item.partition("=")
@@ -151,6 +128,7 @@ def compare_designs_cmd(
         except json.JSONDecodeError:
             value = val
         opts.setdefault(dname, {})[oname] = value
+    build_comparison(study, names, opts, reference_runs, reference_surrogate)  # before any run
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_designs(study, runner, names, opts, reference_runs,
                                  reference_surrogate, log=say)

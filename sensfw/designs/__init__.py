@@ -9,6 +9,7 @@ from . import (  # noqa: F401  (register the built-ins)
     oat,
     response_surface,
     sobol,
+    subset,
 )
 from .base import Design, DesignError, ScreeningResult
 

@@ -9,9 +9,16 @@ from ..params import DesignSpace
 
 
 def to_table(space: DesignSpace, coded: np.ndarray, prefix: str) -> pd.DataFrame:
-    """Physical run table from a coded matrix (clipped to [-1, 1])."""
+    """Physical run table from a coded matrix (clipped to [-1, 1]). Coded -1, 0 and 1 become
+    exactly the low bound, the mid-point and the high bound as the full factorial's levels
+    (``mid + c * half`` can miss a bound by a rounding error, which leaves the bounds and
+    makes a run at a bound a different run, with its own key in the run store, from the full
+    factorial's run there)."""
     coded = np.clip(np.asarray(coded, float), -1.0, 1.0)
     frame = space.decode(coded)
+    for j, v in enumerate(space.variables):
+        for c, exact in ((-1.0, v.low), (0.0, v.low + (v.high - v.low) / 2), (1.0, v.high)):
+            frame.iloc[coded[:, j] == c, j] = exact
     width = len(str(len(frame)))
     frame.index = [f"{prefix}:{i + 1:0{width}d}" for i in range(len(frame))]
     return frame[space.names]

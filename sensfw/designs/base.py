@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import AnalysisError, OptionError
+from ..options import checked
 from ..params import DesignSpace
 
 
@@ -47,25 +48,17 @@ class ScreeningResult:
 class Design(ABC):
     """Base class of design plugins (group ``sensfw.designs``).
 
-    Subclasses set ``name`` and ``defaults`` (every option with its default); options are
-    validated at construction so a study fails before anything runs.
+    Subclasses set ``name`` and ``Options`` (:mod:`sensfw.options`: every option with its
+    type, range and default); options are checked at construction, so a study fails before
+    anything runs, and ``self.options`` holds them with the defaults of the others. A design
+    without ``Options`` may list untyped options with their defaults in ``defaults``.
     """
 
     name: ClassVar[str] = "design"
     defaults: ClassVar[dict[str, Any]] = {}
 
     def __init__(self, **options: Any):
-        unknown = set(options) - set(self.defaults)
-        if unknown:
-            raise DesignError(f"design {self.name!r}: unknown option(s) "
-                              f"{', '.join(sorted(unknown))}; accepted: "
-                              f"{', '.join(sorted(self.defaults)) or '(none)'}",
-                              option=sorted(unknown)[0])
-        self.options = {**self.defaults, **options}
-        self.validate()
-
-    def validate(self) -> None:  # noqa: B027  (optional hook)
-        """Check ``self.options``; raise :class:`DesignError` naming the option."""
+        self.options = checked(type(self), options, DesignError, f"design {self.name!r}")
 
     @abstractmethod
     def n_runs(self, space: DesignSpace) -> int:

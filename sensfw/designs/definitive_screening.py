@@ -15,12 +15,14 @@ list: 2k + 1 runs) and the first k columns.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 from scipy import stats
 
+from ..options import Float, Int, PluginOptions
 from ..plugins import designs
 from ._coded import to_table
 from .base import Design, DesignError, ScreeningResult, responses
@@ -74,14 +76,11 @@ class DefinitiveScreening(Design):
     """
 
     name = "definitive_screening"
-    defaults: ClassVar[dict] = {"alpha": 0.05, "extra_center": 0}
 
-    def validate(self):
-        if not 0 < float(self.options["alpha"]) < 0.5:
-            raise DesignError("design 'definitive_screening': alpha must be in (0, 0.5)")
-        if not isinstance(self.options["extra_center"], int) or self.options["extra_center"] < 0:
-            raise DesignError("design 'definitive_screening': extra_center must be an integer "
-                              ">= 0")
+    class Options(PluginOptions):
+        alpha: Annotated[Float, Field(gt=0, lt=0.5)] = Field(
+            0.05, description="a number in (0, 0.5)")
+        extra_center: Annotated[Int, Field(ge=0)] = Field(0, description="an integer >= 0")
 
     def n_runs(self, space):
         return 2 * order_for(len(space)) + 1 + self.options["extra_center"]

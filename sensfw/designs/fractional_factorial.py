@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import itertools
 import string
-from typing import ClassVar
+from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
+from ..options import Int, PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import to_table
@@ -113,17 +115,12 @@ class FractionalFactorial(Design):
     in the table."""
 
     name = "fractional_factorial"
-    defaults: ClassVar[dict] = {"generators": None, "resolution": 4, "center": 0}
 
-    def validate(self):
-        o = self.options
-        if o["generators"] is not None and not isinstance(o["generators"], str):
-            raise DesignError("design 'fractional_factorial': generators must be a string like "
-                              "'a b c ab'")
-        if o["resolution"] not in (3, 4, 5, 6):
-            raise DesignError("design 'fractional_factorial': resolution must be 3, 4, 5 or 6")
-        if not isinstance(o["center"], int) or o["center"] < 0:
-            raise DesignError("design 'fractional_factorial': center must be an integer >= 0")
+    class Options(PluginOptions):
+        generators: Str | None = Field(
+            None, description="a string of generators like 'a b c ab' or none")
+        resolution: Literal[3, 4, 5, 6] = Field(4, description="3, 4, 5 or 6")
+        center: Annotated[Int, Field(ge=0)] = Field(0, description="an integer >= 0")
 
     def matrix(self, k: int) -> tuple[np.ndarray, str, int]:
         """Coded matrix, its generators and its achieved resolution (cached per k)."""

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import Field, model_validator
 
 from ..errors import AnalysisError
+from ..options import Bool, Float, Int, PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import to_table
@@ -23,20 +25,28 @@ class Morris(Design):
     mu*, sigma and the bootstrap confidence interval of mu*; importance = mu*."""
 
     name = "morris"
-    defaults: ClassVar[dict] = {"trajectories": 10, "levels": 4, "optimal_trajectories": None,
-                                "local_optimization": True, "groups": None,
-                                "num_resamples": 200, "conf_level": 0.95}
 
-    def validate(self):
-        o = self.options
-        if not isinstance(o["trajectories"], int) or o["trajectories"] < 2:
-            raise DesignError("design 'morris': trajectories must be an integer >= 2")
-        if not isinstance(o["levels"], int) or o["levels"] < 2 or o["levels"] % 2:
-            raise DesignError("design 'morris': levels must be an even integer >= 2")
-        opt = o["optimal_trajectories"]
-        if opt is not None and (not isinstance(opt, int) or not 2 <= opt < o["trajectories"]):
-            raise DesignError("design 'morris': optimal_trajectories must be an integer in "
-                              "[2, trajectories)")
+    class Options(PluginOptions):
+        trajectories: Annotated[Int, Field(ge=2)] = Field(10, description="an integer >= 2")
+        levels: Annotated[Int, Field(ge=2, multiple_of=2)] = Field(
+            4, description="an even integer >= 2")
+        optimal_trajectories: Int | None = Field(
+            None, description="an integer in [2, trajectories) or none")
+        local_optimization: Bool = Field(True, description="true or false")
+        groups: dict[str, list[Str]] | None = Field(
+            None, description="a table of group name -> list of variables")
+        num_resamples: Annotated[Int, Field(ge=1)] = Field(200, description="an integer >= 1")
+        conf_level: Annotated[Float, Field(gt=0, lt=1)] = Field(
+            0.95, description="a number in (0, 1)")
+
+        @model_validator(mode="after")
+        def _optimal_below_trajectories(self):
+            opt = self.optimal_trajectories
+            if opt is not None and not 2 <= opt < self.trajectories:
+                raise DesignError("optimal_trajectories must be an integer in [2, "
+                                  f"trajectories) = [2, {self.trajectories}), got {opt}",
+                                  option="optimal_trajectories")
+            return self
 
     def _problem(self, space: DesignSpace) -> dict:
         prob = {"num_vars": len(space), "names": space.names, "bounds": [[-1.0, 1.0]] *

@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 from ..errors import AnalysisError
+from ..options import PluginOptions
 from ..params import DesignSpace
 from ..plugins import designs
-from .base import Design, DesignError, ScreeningResult, responses
+from .base import Design, ScreeningResult, responses
 
 
 @designs.register("oat")
@@ -27,13 +29,11 @@ class OAT(Design):
     """
 
     name = "oat"
-    defaults: ClassVar[dict] = {"combine": "max", "normalise": "max"}
 
-    def validate(self):
-        if self.options["combine"] not in ("max", "mean", "sum"):
-            raise DesignError("design 'oat': combine must be 'max', 'mean' or 'sum'")
-        if self.options["normalise"] not in ("max", "sum"):
-            raise DesignError("design 'oat': normalise must be 'max' or 'sum'")
+    class Options(PluginOptions):
+        combine: Literal["max", "mean", "sum"] = Field(
+            "max", description="'max', 'mean' or 'sum' (of a variable's min and max runs)")
+        normalise: Literal["max", "sum"] = Field("max", description="'max' or 'sum'")
 
     def n_runs(self, space: DesignSpace) -> int:
         return 2 * len(space) + 1

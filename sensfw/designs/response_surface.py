@@ -3,11 +3,13 @@ central composite."""
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
+from ..options import Int, PluginOptions
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import linear_importance, to_table
@@ -21,16 +23,14 @@ class LatinHypercube(Design):
     Analysis: importance = |coefficient| of a main-effect least-squares fit in coded units."""
 
     name = "lhs"
-    defaults: ClassVar[dict] = {"samples": None, "criterion": "maximin", "iterations": 20}
 
-    def validate(self):
-        o = self.options
-        if o["samples"] is not None and (not isinstance(o["samples"], int) or o["samples"] < 2):
-            raise DesignError("design 'lhs': samples must be an integer >= 2")
-        if o["criterion"] not in (None, "maximin", "centermaximin", "correlation", "lhsmu",
-                                  "center"):
-            raise DesignError("design 'lhs': criterion must be maximin, centermaximin, "
-                              "correlation, lhsmu or center")
+    class Options(PluginOptions):
+        samples: Annotated[Int, Field(ge=2)] | None = Field(
+            None, description="an integer >= 2 or none (10 per variable)")
+        criterion: Literal["maximin", "centermaximin", "correlation", "lhsmu", "center"] | \
+            None = Field("maximin", description="maximin, centermaximin, correlation, lhsmu, "
+                                                "center or none")
+        iterations: Annotated[Int, Field(ge=1)] = Field(20, description="an integer >= 1")
 
     def n_runs(self, space: DesignSpace) -> int:
         return self.options["samples"] or 10 * len(space)
@@ -54,11 +54,9 @@ class BoxBehnken(Design):
     runs. Analysis: ``|b_i| + |b_ii|`` of a quadratic fit in coded units."""
 
     name = "box_behnken"
-    defaults: ClassVar[dict] = {"center": 1}
 
-    def validate(self):
-        if not isinstance(self.options["center"], int) or self.options["center"] < 1:
-            raise DesignError("design 'box_behnken': center must be an integer >= 1")
+    class Options(PluginOptions):
+        center: Annotated[Int, Field(ge=1)] = Field(1, description="an integer >= 1")
 
     def _matrix(self, k):
         from pyDOE3 import bbdesign
@@ -86,16 +84,15 @@ class CentralComposite(Design):
     bounds. Analysis as Box-Behnken."""
 
     name = "central_composite"
-    defaults: ClassVar[dict] = {"face": "ccf", "center": [1, 1], "alpha": "orthogonal"}
 
-    def validate(self):
-        o = self.options
-        if o["face"] not in ("ccf", "cci"):
-            raise DesignError("design 'central_composite': face must be 'ccf' or 'cci' (a "
-                              "circumscribed design leaves the bounds)")
-        if o["alpha"] not in ("orthogonal", "rotatable"):
-            raise DesignError("design 'central_composite': alpha must be 'orthogonal' or "
-                              "'rotatable'")
+    class Options(PluginOptions):
+        face: Literal["ccf", "cci"] = Field(
+            "ccf", description="'ccf' or 'cci' (a circumscribed design leaves the bounds)")
+        center: tuple[Annotated[Int, Field(ge=0)], Annotated[Int, Field(ge=0)]] = Field(
+            (1, 1), description="two integers >= 0 (centre runs of the factorial and axial "
+                                "parts)")
+        alpha: Literal["orthogonal", "rotatable"] = Field(
+            "orthogonal", description="'orthogonal' or 'rotatable'")
 
     def _matrix(self, k):
         from pyDOE3 import ccdesign

@@ -3,15 +3,23 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated
 
 import numpy as np
 import pandas as pd
+from pydantic import AfterValidator, Field
 
 from ..errors import AnalysisError
+from ..options import Bool, Float, Int, PluginOptions
 from ..plugins import designs
 from ._coded import to_table
-from .base import Design, DesignError, ScreeningResult, responses
+from .base import Design, ScreeningResult, responses
+
+
+def _power_of_two(n: int) -> int:
+    if n & (n - 1):
+        raise ValueError("not a power of 2")
+    return n
 
 
 @designs.register("sobol")
@@ -21,13 +29,14 @@ class Sobol(Design):
     bootstrap confidence intervals; importance = ST. Every run is needed."""
 
     name = "sobol"
-    defaults: ClassVar[dict] = {"N": 64, "second_order": False, "num_resamples": 200,
-                                "conf_level": 0.95}
 
-    def validate(self):
-        n = self.options["N"]
-        if not isinstance(n, int) or n < 2 or n & (n - 1):
-            raise DesignError("design 'sobol': N must be a power of 2 (Sobol' sequence)")
+    class Options(PluginOptions):
+        N: Annotated[Int, Field(ge=2), AfterValidator(_power_of_two)] = Field(
+            64, description="a power of 2 (Sobol' sequence)")
+        second_order: Bool = Field(False, description="true or false")
+        num_resamples: Annotated[Int, Field(ge=1)] = Field(200, description="an integer >= 1")
+        conf_level: Annotated[Float, Field(gt=0, lt=1)] = Field(
+            0.95, description="a number in (0, 1)")
 
     def _problem(self, space):
         return {"num_vars": len(space), "names": space.names, "bounds": [[-1.0, 1.0]] *

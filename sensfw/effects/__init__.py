@@ -7,7 +7,8 @@ model, through the hooks the model offers there (:mod:`sensfw.models.places`).
 * :mod:`.elements` — effects that add force elements, bodies or mass: ``damping``,
   ``preload``, ``added_mass``, ``flexible_mode``, ``limit_stop``;
 * :mod:`.joint` — effects at a bolted joint: ``micro_slip`` (Iwan model of Jenkins
-  elements), ``cubic_stiffness`` (``clearance`` and ``damping`` fit joints too).
+  elements), ``cubic_stiffness`` (``clearance`` and ``damping`` fit joints too);
+* :mod:`.laws` — the wrapped contact and joint laws the effects put in place.
 """
 
 from . import contact, elements, joint  # noqa: F401  (register the built-ins)

@@ -16,7 +16,10 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import ClassVar
 
-from ..models.places import Hooks, Place
+from pydantic import Field
+
+from ..models.places import Hooks, Place, make_effect  # noqa: F401  (re-exported)
+from ..options import PluginOptions, Str
 from ..params import Parameter
 
 #: Amplitude-dependence classes of a nonlinear structure's response (Kerschen, Worden,
@@ -34,8 +37,9 @@ SIGNATURE_CLASSES = {
 
 
 class Effect(ABC):
-    """Base class of effects. ``attach`` names the place (``None``: the first of
-    ``preferred_places`` the model has, or its only fitting place)."""
+    """Base class of effects. ``attach`` names the place (``None``: the place the model
+    prefers for this effect, :attr:`sensfw.models.Model.preferred_places`, or its only
+    fitting place)."""
 
     name: ClassVar[str] = "effect"
     #: kinds of place (:class:`~sensfw.models.places.Place`) the effect fits
@@ -43,13 +47,18 @@ class Effect(ABC):
     #: optional hooks the effect uses, which only some places offer (``"add_jenkins"``:
     #: :attr:`~sensfw.models.places.Place.offers`)
     needs: ClassVar[tuple[str, ...]] = ()
-    #: places tried first when ``attach`` is not given (names used by the shipped models)
-    preferred_places: ClassVar[tuple[str, ...]] = ()
     signatures: ClassVar[tuple[str, ...]] = ()
     signature_classes: ClassVar[frozenset[str]] = frozenset()
     #: parameter values at which the effect vanishes exactly (the model without it): a
     #: calibration that starts there can only end better than the model without the effect
     neutral: ClassVar[dict[str, float]] = {}
+
+    class Options(PluginOptions):
+        """An effect's one option, where it attaches (:mod:`sensfw.options`)."""
+
+        attach: Str | None = Field(
+            None, description="a place of the model (`sensfw places MODEL`) or none (the "
+                              "place the model prefers for the effect)")
 
     def __init__(self, attach: str | None = None):
         self.attach = attach
@@ -99,21 +108,15 @@ def decade_probes(effect: Effect, name: str, fractions=(0.01, 0.1, 1.0)
     return [{**nominal, name: top * f} for f in fractions]
 
 
-def make_effect(spec) -> Effect:
-    """An effect from its spec: a name, ``{"name": ..., "attach": ...}`` or an Effect."""
-    from ..errors import SensfwError
-    from ..plugins import effects
+def add_spring_along_normal(hooks, place, name: str, force) -> None:
+    """A force element at a body ``place``, along its normal, measured from the static state
+    (it carries no static load): ``force(ops, e, e_dot)`` of the displacement ``e`` (m) and
+    velocity ``e_dot`` of the body point along the normal from where it rests (N)."""
+    nx, ny = place.normal
 
-    if isinstance(spec, Effect):
-        return spec
-    if isinstance(spec, str):
-        spec = {"name": spec}
-    spec = dict(spec)
-    if "name" not in spec:
-        raise SensfwError(f"effect {spec!r} has no name")
-    cls = effects.get(spec.pop("name"))
-    unknown = set(spec) - {"attach"}
-    if unknown:
-        raise SensfwError(f"effect {cls.name!r}: unknown option(s) {', '.join(sorted(unknown))}"
-                          "; known: attach")
-    return cls(**spec)
+    def law(ops, u, v):
+        f = force(ops, u[0] * nx + u[1] * ny, v[0] * nx + v[1] * ny)
+        return f * nx, f * ny
+
+    hooks.add_force(name, place.body0 or hooks.ground, place.r0, place.body1, place.r1, law,
+                    about_static=True)

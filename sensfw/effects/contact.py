@@ -6,53 +6,15 @@ to, so it works on any model's contact places.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import ClassVar
 
 from ..errors import SensfwError
-from ..models.contact import Friction as FrictionLaw
-from ..models.places import ContactLaw
-from ..models.planar import plus
-from ..params import Parameter
+from ..models.contact import FrictionLaw
+from ..params import MM, Parameter
 from ..plugins import effects
 from .base import Effect
-
-MM = 1e-3
-
-
-@dataclass(frozen=True)
-class WithPlay:
-    """A contact law with extra play: the contact closes ``gap`` (m) later."""
-
-    base: ContactLaw
-    gap: float
-
-    def normal(self, ops, delta, delta_dot):
-        return self.base.normal(ops, delta - self.gap, delta_dot)
-
-    def tangential(self, ops, fn, v):
-        return self.base.tangential(ops, fn, v)
-
-    def linearized(self, delta0: float) -> tuple[float, float, float]:
-        return self.base.linearized(delta0 - self.gap)
-
-
-@dataclass(frozen=True)
-class WithFriction:
-    """A contact law with (extra) regularised stick-slip friction driven by its normal
-    force."""
-
-    base: ContactLaw
-    friction: FrictionLaw
-
-    def normal(self, ops, delta, delta_dot):
-        return self.base.normal(ops, delta, delta_dot)
-
-    def tangential(self, ops, fn, v):
-        return plus(self.friction.force(ops, fn, v), self.base.tangential(ops, fn, v))
-
-    def linearized(self, delta0: float) -> tuple[float, float, float]:
-        return self.base.linearized(delta0)
+from .laws import WithDeadZone, WithFriction, WithPlay
 
 
 @effects.register("clearance")
@@ -61,13 +23,12 @@ class Clearance(Effect):
     once the excitation lifts them off their seat. Where a static load keeps the contact
     closed (every contact of the shaft model below about 0.5 N), the play is never crossed;
     :class:`~sensfw.effects.elements.LimitStop` is play about the rest position. At a
-    joint, a dead zone of the slip law (:class:`~sensfw.effects.joint.WithDeadZone`): the
+    joint, a dead zone of the slip law (:class:`~sensfw.effects.laws.WithDeadZone`): the
     interface carries no tangential force until it has slipped by the gap (a bolt bearing
     on its hole after its clearance)."""
 
     name = "clearance"
     fits = ("contact", "joint")
-    preferred_places = ("clutch_drive",)
     signatures = ("harmonics (even and odd) that grow with excitation level",
                   "resonances that move with level: down while the contact opens, up once "
                   "the motion exceeds the gap")
@@ -82,8 +43,6 @@ class Clearance(Effect):
     def apply(self, place, hooks, p):
         law, gap = hooks.contact_law(place.name), p["clearance_gap"] * MM
         if place.kind == "joint":
-            from .joint import WithDeadZone
-
             if gap > 0:  # neutral: a dead zone of no width is the joint's own law
                 hooks.set_contact_law(place.name, WithDeadZone(law, gap))
         else:
@@ -98,7 +57,6 @@ class Friction(Effect):
 
     name = "friction"
     fits = ("contact",)
-    preferred_places = ("clutch_drive",)
     signatures = ("odd harmonics", "amplitude-dependent damping: peaks flatten and widen "
                   "with level", "resonances soften with level", "below the slip velocity "
                   "the regularised law is a viscous coupling: added damping and stiffness "
@@ -131,7 +89,6 @@ class ContactHardening(Effect):
 
     name = "contact_hardening"
     fits = ("contact",)
-    preferred_places = ("bearing_l1",)
     signatures = ("at a preloaded contact (one the static load keeps closed, as every "
                   "contact of the shaft model): the modes the contact carries shift at every "
                   "level (its tangent stiffness at the operating point changes) and even "

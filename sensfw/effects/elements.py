@@ -10,24 +10,9 @@ from typing import ClassVar
 import numpy as np
 
 from ..models.contact import clearance_force
-from ..params import Parameter
+from ..params import MM, Parameter
 from ..plugins import effects
-from .base import Effect, decade_probes
-from .contact import MM
-
-
-def add_spring_along_normal(hooks, place, name: str, force) -> None:
-    """A force element at a body ``place``, along its normal, measured from the static state
-    (it carries no static load): ``force(ops, e, e_dot)`` of the displacement ``e`` (m) and
-    velocity ``e_dot`` of the body point along the normal from where it rests (N)."""
-    nx, ny = place.normal
-
-    def law(ops, u, v):
-        f = force(ops, u[0] * nx + u[1] * ny, v[0] * nx + v[1] * ny)
-        return f * nx, f * ny
-
-    hooks.add_force(name, place.body0 or hooks.ground, place.r0, place.body1, place.r1, law,
-                    about_static=True)
+from .base import Effect, add_spring_along_normal, decade_probes
 
 
 @effects.register("damping")
@@ -37,7 +22,6 @@ class Damping(Effect):
 
     name = "damping"
     fits = ("contact", "body", "joint")
-    preferred_places = ("bearing_l3",)
     signatures = ("lower and wider peaks", "no new harmonics", "no frequency shift")
     signature_classes = frozenset({"amplitude_independent"})
 
@@ -64,7 +48,6 @@ class Preload(Effect):
 
     name = "preload"
     fits = ("body",)
-    preferred_places = ("crankshaft",)
     signatures = ("resonances of the loaded contact path shift up", "harmonic content "
                   "changes (mostly falls)", "a static (DC) shift")
     signature_classes = frozenset({"even_harmonics", "amplitude_independent"})
@@ -93,7 +76,6 @@ class AddedMass(Effect):
 
     name = "added_mass"
     fits = ("body",)
-    preferred_places = ("crankshaft",)
     signatures = ("the resonances the body takes part in shift down", "no new harmonics")
     signature_classes = frozenset({"amplitude_independent"})
 
@@ -115,7 +97,6 @@ class FlexibleMode(Effect):
 
     name = "flexible_mode"
     fits = ("body",)
-    preferred_places = ("crankshaft",)
     signatures = ("a new resonance peak", "no new harmonics")
     signature_classes = frozenset({"new_peak", "amplitude_independent"})
     neutral: ClassVar[dict[str, float]] = {"flex_mass": 0.0}
@@ -178,7 +159,6 @@ class LimitStop(Effect):
 
     name = "limit_stop"
     fits = ("body",)
-    preferred_places = ("crankshaft",)
     signatures = ("resonances that move up with level once the motion crosses the gap",
                   "odd harmonics that grow with level", "nothing below the gap")
     signature_classes = frozenset({"hardening"})
@@ -230,7 +210,6 @@ class DryFriction(Effect):
     name = "dry_friction"
     fits = ("body",)
     needs = ("add_jenkins",)
-    preferred_places = ("beam1",)
     signatures = ("the response per unit drive is lowest at the lowest level",
                   "resonances move down as the point breaks free",
                   "damping that peaks near the level where it starts to slide", "odd harmonics")

@@ -12,42 +12,15 @@ series with a Coulomb slider of slip force ``F_i``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
 from ..errors import SensfwError
-from ..models.places import JointLaw
-from ..params import Parameter
+from ..params import MM, Parameter
 from ..plugins import effects
-from .base import Effect, decade_probes
-from .elements import add_spring_along_normal
-
-MM = 1e-3
-
-
-@dataclass(frozen=True)
-class WithResidual:
-    """A joint law whose tangential force is scaled by ``residual`` (what remains of the
-    joint's own stiffness and damping where micro-slip's elements took the rest)."""
-
-    base: JointLaw
-    residual: float
-
-    def tangential(self, ops, s, s_dot):
-        return self.residual * self.base.tangential(ops, s, s_dot)
-
-    def normal(self, ops, g, g_dot):
-        return self.base.normal(ops, g, g_dot)
-
-
-def tangential_stiffness(law: JointLaw, h: float = 1e-9) -> float:
-    """``-dF_t/ds`` of a joint law at zero slip (N/m; central difference)."""
-    from ..models.contact import numpy_ops
-
-    ops = numpy_ops()
-    return float(-(law.tangential(ops, h, 0.0) - law.tangential(ops, -h, 0.0)) / (2 * h))
+from .base import Effect, add_spring_along_normal, decade_probes
+from .laws import WithCubic, WithResidual, tangential_stiffness
 
 
 @effects.register("micro_slip")
@@ -84,7 +57,6 @@ class MicroSlip(Effect):
     name = "micro_slip"
     fits = ("joint",)
     needs = ("add_jenkins",)
-    preferred_places = ("joint",)
     signatures = ("resonances move down as the level rises", "damping grows with level",
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
@@ -138,20 +110,6 @@ class MicroSlip(Effect):
                                   place.body1, r1, place.tangent, k, force)
 
 
-@dataclass(frozen=True)
-class WithCubic:
-    """A joint law with a cubic term ``-k3 s^3`` in its tangential force (hardening)."""
-
-    base: JointLaw
-    k3: float
-
-    def tangential(self, ops, s, s_dot):
-        return self.base.tangential(ops, s, s_dot) - self.k3 * s * s * s
-
-    def normal(self, ops, g, g_dot):
-        return self.base.normal(ops, g, g_dot)
-
-
 @effects.register("cubic_stiffness")
 class CubicStiffness(Effect):
     """A hardening stiffness, the Duffing oscillator's ``-k3 e^3`` (Worden & Tomlinson
@@ -165,7 +123,6 @@ class CubicStiffness(Effect):
 
     name = "cubic_stiffness"
     fits = ("joint", "body")
-    preferred_places = ("joint", "crankshaft")
     signatures = ("resonances move up as the level rises", "odd harmonics")
     signature_classes = frozenset({"hardening"})
     neutral: ClassVar[dict[str, float]] = {"cubic_stiffness": 0.0}
@@ -193,20 +150,3 @@ class CubicStiffness(Effect):
             return
         add_spring_along_normal(hooks, place, f"cubic_stiffness@{place.name}",
                                 lambda ops, e, e_dot: -k3 * e * e * e)
-
-
-@dataclass(frozen=True)
-class WithDeadZone:
-    """A joint law with a dead zone: no tangential force within ``+-gap`` of slip (a bolt
-    that must cross its hole's clearance before it bears)."""
-
-    base: JointLaw
-    gap: float
-
-    def tangential(self, ops, s, s_dot):
-        engaged = s - ops.max(ops.min(s, self.gap), -self.gap)
-        rate = ops.where(ops.abs(s) > self.gap, s_dot, 0.0)
-        return self.base.tangential(ops, engaged, rate)
-
-    def normal(self, ops, g, g_dot):
-        return self.base.normal(ops, g, g_dot)

@@ -17,10 +17,13 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
+from pydantic import Field
 
 from ..excitation import Chirp
+from ..options import Float, PluginOptions
 from ..params import Parameter, ParameterSet
 from ..plugins import models
+from ..testing import ishigami
 from .base import Model, Signals
 
 
@@ -32,12 +35,17 @@ def scalar_signals(values: Mapping[str, float]) -> Signals:
 
 @models.register("ishigami")
 class Ishigami(Model):
-    """``y = sin x1 + a sin^2 x2 + b x3^4 sin x1`` on [-pi, pi]^3."""
+    """``y = sin x1 + a sin^2 x2 + b x3^4 sin x1`` on [-pi, pi]^3
+    (:func:`sensfw.testing.ishigami`)."""
 
     name = "ishigami"
     version = "1"
     sensors = ("y",)
     default_output = "y"
+
+    class Options(PluginOptions):
+        a: Float = Field(7.0, description="a number")
+        b: Float = Field(0.1, description="a number")
 
     def __init__(self, a: float = 7.0, b: float = 0.1):
         self.a, self.b = float(a), float(b)
@@ -50,8 +58,7 @@ class Ishigami(Model):
 
     def simulate(self, params, excitation=None, solver=None) -> Signals:
         p = self.parameters().complete(params)
-        x1, x2, x3 = p["x1"], p["x2"], p["x3"]
-        y = math.sin(x1) + self.a * math.sin(x2) ** 2 + self.b * x3**4 * math.sin(x1)
+        y = ishigami([[p["x1"], p["x2"], p["x3"]]], self.a, self.b)[0]
         return scalar_signals({"y": y})
 
 
@@ -63,6 +70,9 @@ class TwoDOF(Model):
     version = "1"
     sensors = ("a1", "a2")
     default_output = "a1"
+
+    class Options(PluginOptions):
+        """None: the chain is fixed, and it has no places for effects."""
 
     def parameters(self) -> ParameterSet:
         P = Parameter

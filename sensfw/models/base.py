@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
-from ..errors import SignalError
-from ..excitation import Chirp
+from ..errors import DivergenceError, SignalError
+from ..excitation import Excitation
 from ..params import ParameterSet
-from .places import Place
+from .places import Hooks, Place, attach_effects
 from .stepsize import DEFAULT_TOLERANCE, STIFF_METHOD
 
 
@@ -80,6 +81,23 @@ class Signals:
                    **kw)
 
 
+def check_channels(model: str, channels: Mapping[str, np.ndarray], n: int,
+                   params: Mapping[str, float], step: float | None, unit: str = "") -> None:
+    """Raise :class:`~sensfw.errors.DivergenceError` for the first channel that is not ``n``
+    finite samples, or that exceeds 1e7 (``unit``): a run that blew up."""
+    limit = f"1e7 {unit}" if unit else "1e7"
+    for name, x in channels.items():
+        if len(x) != n or not np.all(np.isfinite(x)):
+            raise DivergenceError(model, f"diverged (non-finite {name!r})", params, step=step)
+        if np.max(np.abs(x)) > 1e7:
+            raise DivergenceError(model, f"diverged ({name!r} exceeds {limit})", params,
+                                  step=step)
+
+
+#: the description of a model's ``effects`` option (:mod:`sensfw.options`)
+EFFECTS = ("a list of effects: registered names or {name, attach} tables "
+           "(`sensfw places MODEL` lists where each fits)")
+
 #: Exudyn's implicit integrators (unconditionally stable; the step is chosen for accuracy)
 IMPLICIT_METHODS = ("GeneralizedAlpha", "TrapezoidalIndex2")
 
@@ -127,12 +145,33 @@ class Model(ABC):
     bounds), the default grouping of parameters into design variables (:meth:`groups`) and
     their ``sensors``; :meth:`simulate` turns a full parameter dict and an excitation into
     :class:`Signals`.
+
+    A model that takes physical effects declares its :meth:`places` and which of them it
+    prefers per effect (:attr:`preferred_places`), calls ``super().__init__(effects)`` once
+    its places are known, and applies them with :meth:`apply_effects` while it assembles
+    itself; :meth:`with_effect_parameters` and :meth:`effect_options` add their parameters
+    and specs. Effects are resolved against the model here and nowhere else: the model
+    never names an effect, nor an effect a model's place.
     """
 
     name: str = "model"
     version: str = "0"
     sensors: tuple[str, ...] = ()
     default_output: str = ""
+    #: effect name -> the places tried first when such an effect is added without
+    #: ``attach`` (else the only place it fits; else the effect must say where)
+    preferred_places: ClassVar[Mapping[str, tuple[str, ...]]] = {}
+    #: the model's effects, each with ``attach`` resolved, and the place each acts at
+    effects: tuple = ()
+    attached: tuple = ()
+
+    def __init__(self, effects: Sequence = ()):
+        """Resolve ``effects`` (registered names, ``{"name": ..., "attach": ...}`` specs or
+        :class:`sensfw.effects.Effect` objects) against the model's places
+        (:func:`~sensfw.models.places.attach_effects`: every problem at its path,
+        ``effects[1].attach``, in one :class:`~sensfw.errors.OptionError`)."""
+        self.effects, self.attached = attach_effects(self.places(), effects, self.name,
+                                                     self.preferred_places)
 
     @abstractmethod
     def parameters(self) -> ParameterSet: ...
@@ -148,8 +187,23 @@ class Model(ABC):
         """Where effects can act (:mod:`sensfw.models.places`); none by default."""
         return {}
 
+    def with_effect_parameters(self, own: ParameterSet) -> ParameterSet:
+        """``own`` (the model's parameters) followed by those its effects add."""
+        extra = [p for e in self.effects for p in e.parameters()]
+        return ParameterSet([*own.values(), *extra]) if extra else own
+
+    def effect_options(self) -> dict:
+        """``{"effects": [spec, ...]}`` for :meth:`options` (empty without effects)."""
+        return {"effects": [e.spec() for e in self.effects]} if self.effects else {}
+
+    def apply_effects(self, hooks: Hooks, p: Mapping[str, float]) -> None:
+        """Apply every effect at its place through ``hooks`` (the model's assembly) for the
+        full parameter values ``p``."""
+        for effect, place in self.attached:
+            effect.apply(place, hooks, p)
+
     @abstractmethod
     def simulate(
-        self, params: Mapping[str, float], excitation: Chirp,
+        self, params: Mapping[str, float], excitation: Excitation,
         solver: SolverSettings | None = None,
     ) -> Signals: ...

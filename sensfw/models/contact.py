@@ -140,7 +140,7 @@ def stiffness_si(k_n_per_mm: float, b: float) -> float:
 
 
 @dataclass(frozen=True)
-class Friction:
+class FrictionLaw:
     """Regularised stick-slip friction (Eq. 3): the tangential force on the sliding body is
     ``-mu(v) fn`` for the slip velocity ``v`` and the normal force magnitude ``fn``."""
 
@@ -162,7 +162,7 @@ class PenaltyLaw:
     b: float
     c: float  # N s/m
     dmax: float  # m
-    friction: Friction | None = None
+    friction: FrictionLaw | None = None
 
     def normal(self, ops, delta: Expr, delta_dot: Expr) -> Expr:
         return impact_force(ops, delta, delta_dot, self.k, self.b, self.c, self.dmax)

@@ -38,7 +38,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
-from ..errors import SensfwError
+from ..errors import OptionError, UnknownPluginError
+from ..options import describe
 
 Expr = Any  # an exudyn.symbolic.Real expression, or a float/array for numpy evaluation
 Point = tuple[float, float]
@@ -181,36 +182,57 @@ def fitting_places(places: Mapping[str, Place], effect: EffectLike | type) -> li
     return [n for n, pl in places.items() if pl.kind in effect.fits and needs <= pl.offers]
 
 
-def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
-                   model: str) -> list[tuple[EffectLike, Place]]:
-    """Each effect with the place it attaches to.
+def make_effect(spec) -> EffectLike:
+    """An effect from its spec: a registered name, ``{"name": ..., "attach": ...}``, or an
+    effect object (returned as it is). Effects are found through the registry
+    (:data:`sensfw.plugins.effects`), so models never import them; their options are checked
+    by the contract of every plugin kind (:func:`sensfw.options.make`)."""
+    from ..options import make
+    from ..plugins import effects
 
-    ``attach`` must name a place of a kind the effect fits. Without ``attach``, the effect's
-    ``preferred_places`` that the model has come first, then the only fitting place; otherwise
-    the error lists the choices. Two effects that add the same parameter are refused.
-    """
-    out, owners = [], {}
-    for eff in effects:
+    if not isinstance(spec, (str, Mapping)):
+        return spec
+    spec = {"name": spec} if isinstance(spec, str) else dict(spec)
+    name = spec.pop("name", None)
+    if not isinstance(name, str):
+        raise OptionError(f"effect {spec!r} has no name (a registered effect)", option="name")
+    return make(effects, name, spec)
+
+
+def _resolve(places: Mapping[str, Place], effects: Sequence[EffectLike], model: str,
+             preferred: Mapping[str, Sequence[str]], index: Sequence[int] | None = None
+             ) -> tuple[list, list[tuple[str, str]]]:
+    """``(attached, problems)``: each effect that fits with its place, and every problem as
+    ``(path, message)`` with the path of the effect (``effects[1].attach``; ``index``: the
+    position of each effect in the model's list, default its position in ``effects``)."""
+    out, owners, problems = [], {}, []
+    for k, eff in enumerate(effects):
+        i = k if index is None else index[k]
         fits = fitting_places(places, eff)
         needs = tuple(getattr(eff, "needs", ()))
         if not fits:
             kinds = sorted({pl.kind for pl in places.values()})
             if any(pl.kind in eff.fits for pl in places.values()):
-                raise SensfwError(f"effect {eff.name!r} needs the hook(s) {', '.join(needs)}, "
-                                  f"which no place of model {model!r} offers")
-            raise SensfwError(f"effect {eff.name!r} fits places of kind "
-                              f"{', '.join(eff.fits)}; model {model!r} has places of kind "
-                              f"{', '.join(kinds) or '(none)'}")
+                problems.append((f"effects[{i}].name", f"effect {eff.name!r} needs the hook(s) "
+                                 f"{', '.join(needs)}, which no place of model {model!r} "
+                                 "offers"))
+            else:
+                problems.append((f"effects[{i}].name", f"effect {eff.name!r} fits places of "
+                                 f"kind {', '.join(eff.fits)}; model {model!r} has places of "
+                                 f"kind {', '.join(kinds) or '(none)'}"))
+            continue
         name = eff.attach
         if name is None:
-            preferred = [n for n in getattr(eff, "preferred_places", ()) if n in fits]
-            if preferred:
-                name = preferred[0]
+            first = [n for n in preferred.get(eff.name, ()) if n in fits]
+            if first:
+                name = first[0]
             elif len(fits) == 1:
                 name = fits[0]
             else:
-                raise SensfwError(f"effect {eff.name!r}: say where (attach = ...); it fits "
-                                  f"{', '.join(fits)} of model {model!r}")
+                problems.append((f"effects[{i}].attach", f"effect {eff.name!r}: say where "
+                                 f"(attach = ...); it fits {', '.join(fits)} of model "
+                                 f"{model!r}"))
+                continue
         elif name not in fits:
             if name not in places:
                 what = f"model {model!r} has no place {name!r}"
@@ -218,13 +240,58 @@ def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
                 what = f"{name!r} is a {places[name].kind}"
             else:
                 what = f"{name!r} does not offer {', '.join(needs)}"
-            raise SensfwError(f"effect {eff.name!r} cannot attach to {name!r} ({what}); it "
-                              f"fits {', '.join(fits)}")
+            problems.append((f"effects[{i}].attach", f"effect {eff.name!r} cannot attach to "
+                             f"{name!r} ({what}); it fits {', '.join(fits)}"))
+            continue
         eff.attach = name
-        for p in eff.parameters():
-            if p.name in owners:
-                raise SensfwError(f"effects {owners[p.name]!r} and {eff.name!r}@{name} both "
-                                  f"add parameter {p.name!r}")
-            owners[p.name] = f"{eff.name}@{name}"
+        clash = [p.name for p in eff.parameters() if p.name in owners]
+        if clash:
+            problems.append((f"effects[{i}]", f"effects {owners[clash[0]]!r} and "
+                             f"{eff.name!r}@{name} both add parameter {clash[0]!r}"))
+            continue
+        owners.update({p.name: f"{eff.name}@{name}" for p in eff.parameters()})
         out.append((eff, places[name]))
-    return out
+    return out, problems
+
+
+def resolve_places(places: Mapping[str, Place], effects: Sequence[EffectLike],
+                   model: str, preferred: Mapping[str, Sequence[str]] | None = None
+                   ) -> list[tuple[EffectLike, Place]]:
+    """Each effect with the place it attaches to (its ``attach`` is set to that place).
+
+    ``attach`` must name a place of a kind the effect fits. Without ``attach``, the places
+    the model prefers for that effect (``preferred[effect.name]``, see
+    :attr:`sensfw.models.Model.preferred_places`) come first, then the only fitting place;
+    otherwise the error lists the choices. Two effects that add the same parameter are
+    refused. :class:`~sensfw.errors.OptionError` names every problem at its path
+    (``effects[1].attach``).
+    """
+    attached, problems = _resolve(places, effects, model, preferred or {})
+    if problems:
+        raise OptionError(describe(problems), option=problems[0][0], problems=problems)
+    return attached
+
+
+def attach_effects(places: Mapping[str, Place], specs: Sequence, model: str,
+                   preferred: Mapping[str, Sequence[str]] | None = None
+                   ) -> tuple[tuple[EffectLike, ...], tuple[tuple[EffectLike, Place], ...]]:
+    """``(effects, attached)``: the effects of ``specs`` (:func:`make_effect`) and each with
+    its place (:func:`resolve_places`); every problem of every spec is reported at once, at
+    its path (``effects[1].name``, ``effects[0].attach``), as one
+    :class:`~sensfw.errors.OptionError`."""
+    made, problems = [], []
+    for i, spec in enumerate(specs):
+        try:
+            made.append((i, make_effect(spec)))
+        except UnknownPluginError as err:
+            problems.append((f"effects[{i}].name", str(err)))
+        except OptionError as err:
+            problems += [(f"effects[{i}].{p}" if p else f"effects[{i}]", m)
+                         for p, m in err.problems]
+    attached, found = _resolve(places, [e for _, e in made], model, preferred or {},
+                               index=[i for i, _ in made])
+    problems += found
+    if problems:
+        problems.sort(key=lambda pm: int(pm[0].split("[", 1)[1].split("]", 1)[0]))
+        raise OptionError(describe(problems), option=problems[0][0], problems=problems)
+    return tuple(e for _, e in made), tuple(attached)

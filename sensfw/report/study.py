@@ -190,6 +190,115 @@ def validation_table(per: dict) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("surrogate").astype(float)
 
 
+#: Why a column of :func:`validation_table` can be empty for every surrogate.
+EMPTY_COLUMN_REASON = {
+    "confirm RMSE": "the stage has no confirmation runs (stage confirmation_runs = 0)",
+    "PI coverage": "the stage has no confirmation runs (stage confirmation_runs = 0)",
+    "R²adj": "no surrogate of the stage has a parametric form with a number of terms",
+    "max VIF": "too few runs for variance inflation factors",
+    "Q² k-fold": "too few runs for k-fold refits",
+}
+
+
+def drop_empty_columns(frame: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """``frame`` without the columns that are NaN in every row, and one line per dropped
+    column saying why (:data:`EMPTY_COLUMN_REASON`)."""
+    empty = [c for c in frame.columns if frame[c].isna().all()]
+    by_reason: dict[str, list[str]] = {}
+    for c in empty:
+        by_reason.setdefault(EMPTY_COLUMN_REASON.get(c, "nothing to show"), []).append(c)
+    why = [f"{' and '.join(cols)}: left out, {reason}." for reason, cols in by_reason.items()]
+    return frame.drop(columns=empty), why
+
+
+def comparison_section(page, result) -> None:
+    """The study's Eq. 18 results beside the published ones its ``[compare_with]`` names
+    (:mod:`sensfw.analysis.paper_comparison`): R²adj and significant terms per response,
+    each term's sign and significance, and why terms differ."""
+    from ..analysis.paper_comparison import comparison_for
+
+    comp = comparison_for(result)
+    ref = comp.reference
+    page.h2(f"Beside the paper: stage {comp.stage} and {ref.key} (Fig. 10b)")
+    page.p(ref.citation, "meta")
+    page.p("Paper: " + "; ".join(f"{k} {v}" for k, v in ref.meta.items()) + f". Factors "
+           f"({ref.doe.get('source', '')}): " + "; ".join(
+               f"{x} {f['name']} = {comp.factors.get(x, '?')} "
+               f"({' / '.join(f'{v:g}' for v in f['levels'])} {f['unit']})"
+               for x, f in ref.factors.items()) + ".")
+    for n in comp.notes:
+        page.note(n)
+    page.table(comp.summary.T, index=True)
+    page.p(f"Significant: p < {ref.alpha:g}. 'paper Fig. 10b' is the table, 'paper text' the "
+           "terms Sect. 3.2 names (a subset of the table's). 'sensfw' is this study's Eq. 18 "
+           "(coded fit with an intercept, coefficients in physical units); 'sensfw as Fig. "
+           "10b' the same runs fitted the way the paper's table was (physical values, the "
+           "columns a MATLAB-style rank check keeps).", "meta")
+    page.h3("Why the terms differ")
+    for line in comp.reasons:
+        page.p(line)
+    page.table(comp.effects * 100, floatfmt="{:.2f}")
+    page.p("Main effect of each factor in this study: range of its level means in % of the "
+           "score's range over the runs.", "meta")
+    for r, frame in comp.terms.items():
+        pub = ref.responses[r]
+        page.h3(f"{pub.name}: every Eq. 18 term ({pub.source}; sensfw score "
+                f"{comp.summary.loc[r, 'sensfw score']})")
+        page.table(frame, highlight=frame["agreement (as Fig. 10b)"]
+                   .str.startswith("both significant"))
+        page.p("Highlighted: significant in both, as Fig. 10b. Estimates in physical units; "
+               "the paper's response units are not stated, so compare signs, not sizes.",
+               "meta")
+
+
+def agreement_section(page, result) -> None:
+    """Whether the study reaches the conclusions of the fuller pipeline its ``[agree_with]``
+    names (:mod:`sensfw.analysis.agreement`): run counts, the screen's selection, and per
+    score the second stage's predictions and significant terms."""
+    from ..analysis.agreement import MUST, MUST_NOT, agreement_for
+    from ..errors import AnalysisError
+
+    spec = result.study.spec.agree_with
+    page.h2(f"Agreement with the full pipeline ({spec.results})")
+    try:
+        agr = agreement_for(result)
+    except AnalysisError as err:
+        page.note(f"Not measured: {err}. Run the full pipeline into that folder first "
+                  "(e.g. sensfw run studies/paper.toml --out out/paper).")
+        return
+    page.p(f"This study: {agr['runs']} runs; the full pipeline: {agr['reference_runs']} runs "
+           f"({agr['folder']}).")
+    page.p(f"Screen: selected {', '.join(agr['selected']) or 'none'}; the full pipeline "
+           f"selected {', '.join(agr['reference_selected']) or 'none'}: "
+           + ("the same set." if agr["screen"] else "a different set."),
+           "ok" if agr["screen"] else "note")
+    rows = {}
+    for label, a in agr["scores"].items():
+        if "error" in a:
+            rows[label] = {"surrogate": a["error"]}
+            continue
+        rows[label] = {"surrogate": a["surrogate"], "Q² LOO": a["q2_loo"],
+                       "RMSE on the full factorial's other runs": a["rmse"],
+                       "its LOO RMSE": a["rmse_loo_reference"], "ratio": a["ratio"],
+                       "predicts": "yes" if a["predicts"] else "no",
+                       "terms missed": ", ".join(a["missed"]) or "none",
+                       "terms flagged wrongly": ", ".join(a["wrong"]) or "none",
+                       "same set at p < 0.05": "yes" if a["strict"] else "no"}
+    if rows:
+        frame = pd.DataFrame.from_dict(rows, orient="index")
+        frame.index.name = "score"
+        page.table(frame)
+    page.p("Predicts: the surrogate (Eq. 18 or the Gaussian process, whichever has the higher "
+           "leave-one-out Q² on this study's runs) predicts the full factorial's runs this "
+           "study did not make within the full factorial's own leave-one-out RMSE. Terms: "
+           f"Eq. 18 on coded variables flags every term the full factorial has at p < {MUST:g}"
+           f" and none it has at p > {MUST_NOT:g}.", "meta")
+    verdict = ("reaches the full pipeline's conclusions" if agr["reached"] else
+               "does not reach every conclusion of the full pipeline")
+    page.p(f"With {agr['runs']} runs instead of {agr['reference_runs']} this study {verdict}.",
+           "ok" if agr["reached"] else "note")
+
+
 def _time_signals(result, stage) -> bool:
     """Whether the stage's runs are swept time signals (not a function model's scalars)."""
     for key in stage.keys:
@@ -207,7 +316,7 @@ def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
 
 def _step_note(result) -> str:
     """How many runs took a smaller step than the study's, and why (auto_step)."""
-    from ..pipeline import run_step
+    from ..runs.store import run_step
 
     steps = [run_step(result.store, k) for st in result.stages for k in st.keys]
     adaptive = [s for s in steps if "adaptive" in s.get("integrator", "")]
@@ -289,13 +398,22 @@ def write_study_report(result, path: str | Path) -> Path:
                        "meta")
             for label, per in stage.validation.items():
                 page.h3(f"{label}: surrogates side by side (same {stage.table.shape[0]} runs)")
-                page.table(validation_table(per))
+                frame, dropped = drop_empty_columns(validation_table(per))
+                page.table(frame.astype(object).where(frame.notna(), "n/a"))
                 page.p("R²adj and Q² on the scale of the score; Q² from leave-one-out and "
-                       "5-fold refits; confirmation = new runs inside the bounds.", "meta")
+                       "5-fold refits; confirmation = new runs inside the bounds; n/a: the "
+                       "surrogate has no such number (no parametric form for R²adj, a run of "
+                       "leverage 1 for Q² LOO).", "meta")
+                for line in dropped:
+                    page.p(line, "meta")
                 for name in per:
                     page.figure(residual_plots(stage, label, name),
                                 f"{label} / {name}: residuals against fitted values, normal Q-Q.")
             if signals:
                 page.figure(spectrograms(result, stage, study.output),
                             "Fig. 11 analogue: spectrograms of the first and last run.")
+    if study.spec.compare_with is not None:
+        comparison_section(page, result)
+    if study.spec.agree_with is not None:
+        agreement_section(page, result)
     return page.write(path)

@@ -124,3 +124,11 @@ class RunStore:
         if not self.folder.exists():
             return []
         return sorted(p.stem for p in self.folder.glob("*.json"))
+
+
+def run_step(store: RunStore, key: str) -> dict:
+    """The time step a stored run used, what set it, and the integrator (adaptive runs: at
+    most ``step``, with ``mean_step``); ``{}`` for models without one."""
+    rec = store.record(key) or {}
+    return {k: rec[k] for k in ("step", "step_limited_by", "integrator", "mean_step")
+            if k in rec}

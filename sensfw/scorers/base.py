@@ -7,6 +7,7 @@ from typing import Any, ClassVar
 
 from ..errors import OptionError, SensfwError
 from ..models.base import Signals
+from ..options import checked
 
 
 class ScorerError(OptionError):
@@ -18,8 +19,11 @@ class Scorer(ABC):
     """Base class of outcome scorers (plugin group ``sensfw.scorers``).
 
     Subclasses set ``name``, ``outputs`` (names of the numbers :meth:`score` returns),
-    ``needs_reference`` and ``defaults`` (every accepted option with its default); options
-    are validated at construction, so a study file with a wrong option fails before any run.
+    ``needs_reference`` and ``Options`` (:mod:`sensfw.options`: every option with its type,
+    range and default; a scorer without ``Options`` may list untyped options with their
+    defaults in ``defaults``); options are checked at construction, so a study file with a
+    wrong option fails before any run. ``channel`` (the signal scored) is not an option of
+    the scorer but of its use in a study.
     """
 
     name: ClassVar[str] = "scorer"
@@ -28,19 +32,9 @@ class Scorer(ABC):
     defaults: ClassVar[dict[str, Any]] = {}
 
     def __init__(self, channel: str | None = None, **options: Any):
-        unknown = set(options) - set(self.defaults)
-        if unknown:
-            raise ScorerError(f"scorer {self.name!r}: unknown option(s) "
-                              f"{', '.join(sorted(unknown))}; accepted: "
-                              f"{', '.join(sorted(self.defaults)) or '(none)'}",
-                              option=sorted(unknown)[0])
+        self.options = checked(type(self), options, ScorerError, f"scorer {self.name!r}")
         self.channel = channel
         self.given = frozenset(options)  # the options set explicitly (not defaults)
-        self.options = {**self.defaults, **options}
-        self.validate()
-
-    def validate(self) -> None:  # noqa: B027  (optional hook)
-        """Check ``self.options``; raise :class:`ScorerError` naming the option."""
 
     def check_excitation(self, excitation) -> None:  # noqa: B027  (optional hook)
         """Check the options against the study's excitation (a

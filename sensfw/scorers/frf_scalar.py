@@ -2,42 +2,36 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import AfterValidator, Field
 
 from ..models.base import Signals
+from ..options import Float, Int, PluginOptions, choices
 from ..plugins import scorers
 from ..signal import ESTIMATORS, frf
 from .base import Scorer, ScorerError
 
 
+def _band(band: tuple[float, float]) -> tuple[float, float]:
+    if not 0 <= band[0] < band[1] < float("inf"):
+        raise ValueError("not 0 <= fmin < fmax")
+    return band
+
+
 class _FRFScorer(Scorer):
     needs_reference = True
-    defaults: ClassVar[dict] = {"band": (50.0, 5000.0), "estimator": "Hv", "eps": 1.0,
-                                "nperseg": None, "db_ref": 1.0}
 
-    def validate(self) -> None:
-        o = self.options
-        band = o["band"]
-        if not (isinstance(band, (list, tuple)) and len(band) == 2
-                and all(isinstance(b, (int, float)) and not isinstance(b, bool)
-                        for b in band)
-                and 0 <= float(band[0]) < float(band[1]) < float("inf")):
-            raise ScorerError(f"scorer {self.name!r}: band must be [fmin, fmax] in Hz with "
-                              f"0 <= fmin < fmax, got {band!r}", option="band")
-        if o["estimator"] not in ESTIMATORS:
-            raise ScorerError(f"scorer {self.name!r}: estimator must be one of {ESTIMATORS}",
-                              option="estimator")
-        n = o["nperseg"]
-        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 8):
-            raise ScorerError(f"scorer {self.name!r}: nperseg must be None or an integer >= 8, "
-                              f"got {n!r}", option="nperseg")
-        for key in ("eps", "db_ref"):
-            v = o[key]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
-                raise ScorerError(f"scorer {self.name!r}: {key} must be a number > 0, got "
-                                  f"{v!r}", option=key)
+    class Options(PluginOptions):
+        band: Annotated[tuple[Float, Float], AfterValidator(_band)] = Field(
+            (50.0, 5000.0), description="[fmin, fmax] in Hz with 0 <= fmin < fmax")
+        estimator: Literal[ESTIMATORS] = Field(
+            "Hv", description=choices(ESTIMATORS))
+        eps: Annotated[Float, Field(gt=0)] = Field(1.0, description="a number > 0")
+        nperseg: Annotated[Int, Field(ge=8)] | None = Field(
+            None, description="none or an integer >= 8")
+        db_ref: Annotated[Float, Field(gt=0)] = Field(1.0, description="a number > 0")
 
     def check_excitation(self, excitation) -> None:
         """A band the study sets must lie below the Nyquist frequency and inside the

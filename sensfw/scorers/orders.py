@@ -3,8 +3,11 @@ frequency and first harmonic). They analyse the sweep only, not a silent tail af
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated, Literal
 
+from pydantic import Field
+
+from ..options import Bool, Int, PluginOptions
 from ..plugins import scorers
 from ..signal import harmonic_amplitudes, thd
 from .base import Scorer, ScorerError
@@ -24,15 +27,12 @@ class THD(Scorer):
     first (Sect. 2.3)."""
 
     name = "thd"
-    defaults: ClassVar[dict] = {"n_harmonics": None, "unit": "percent", "detrend": False}
 
-    def validate(self):
-        if self.options["unit"] not in ("percent", "dBc"):
-            raise ScorerError("scorer 'thd': unit must be 'percent' or 'dBc'", option="unit")
-        n = self.options["n_harmonics"]
-        if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 2):
-            raise ScorerError("scorer 'thd': n_harmonics must be an integer >= 2",
-                              option="n_harmonics")
+    class Options(PluginOptions):
+        n_harmonics: Annotated[Int, Field(ge=2)] | None = Field(
+            None, description="an integer >= 2 or none (every harmonic below Nyquist)")
+        unit: Literal["percent", "dBc"] = Field("percent", description="'percent' or 'dBc'")
+        detrend: Bool = Field(False, description="true or false")
 
     def score(self, signals, reference=None):
         o = self.options
@@ -47,13 +47,10 @@ class OrderAmplitude(Scorer):
     """RMS amplitude ``P_n`` of order ``order`` in the order spectrum (Eq. 16)."""
 
     name = "order_amplitude"
-    defaults: ClassVar[dict] = {"order": 1, "detrend": False}
 
-    def validate(self):
-        n = self.options["order"]
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ScorerError(f"scorer 'order_amplitude': order must be an integer >= 1, "
-                              f"got {n!r}", option="order")
+    class Options(PluginOptions):
+        order: Annotated[Int, Field(ge=1)] = Field(1, description="an integer >= 1")
+        detrend: Bool = Field(False, description="true or false")
 
     def score(self, signals, reference=None):
         n = self.options["order"]

@@ -3,17 +3,29 @@ of Optimal Prognosis, Most & Will 2008)."""
 
 from __future__ import annotations
 
-from numbers import Integral
-from typing import ClassVar
+from typing import Annotated
 
-from sklearn.utils._param_validation import Interval
+from pydantic import AfterValidator, Field
 from sklearn.utils.validation import check_is_fitted
 
 from ..errors import UnknownPluginError
+from ..options import Int, Pairs, PluginOptions, Str, options_model
 from ..plugins import surrogates
-from .base import SurrogateBase, SurrogateError
+from .base import BOUNDS, SEED, RandomState, SurrogateBase, SurrogateError
 
 DEFAULT = ("eq18", "polynomial", "gaussian_process", "random_forest")
+
+
+def _candidates(names: list[str]) -> list[str]:
+    for name in names:
+        if name == "auto":
+            raise SurrogateError("candidates: 'auto' cannot be its own candidate",
+                                 option="candidates")
+        try:
+            surrogates.get(name)
+        except UnknownPluginError as err:
+            raise SurrogateError(f"candidates: {err}", option="candidates") from None
+    return names
 
 
 @surrogates.register("auto")
@@ -23,12 +35,12 @@ class Auto(SurrogateBase):
     coefficient tables, leave-one-out and intervals are the chosen surrogate's. Candidates
     that cannot be fitted on the data (e.g. Eq. 18 with too few runs) are skipped."""
 
-    _parameter_constraints: ClassVar[dict] = {
-        "candidates": ["array-like"],
-        "bounds": ["array-like", None],
-        "cv": [Interval(Integral, 2, None, closed="left")],
-        "random_state": ["random_state"],
-    }
+    class Options(PluginOptions):
+        candidates: Annotated[list[Str], Field(min_length=1), AfterValidator(_candidates)] = \
+            Field(description="a list of registered surrogate names other than 'auto'")
+        bounds: Pairs = Field(description=BOUNDS)
+        cv: Annotated[Int, Field(ge=2)] = Field(description="an integer >= 2")
+        random_state: RandomState = Field(description=SEED)
 
     def __init__(self, candidates=DEFAULT, bounds=None, cv: int = 5, random_state: int = 0):
         self.candidates = candidates
@@ -36,23 +48,11 @@ class Auto(SurrogateBase):
         self.cv = cv
         self.random_state = random_state
 
-    def _check_options(self) -> None:
-        for name in self.candidates:
-            if name == "auto":
-                raise SurrogateError("Auto: 'auto' cannot be its own candidate",
-                                     option="candidates")
-            try:
-                surrogates.get(name)
-            except UnknownPluginError as err:
-                raise SurrogateError(f"Auto: candidates: {err}", option="candidates") from None
-
     @property
     def loo_method(self) -> str | None:
         return self.estimator_.loo_method if hasattr(self, "estimator_") else None
 
     def fit(self, X, y):
-        import inspect
-
         from sklearn.model_selection import KFold
 
         from ..analysis.validation import q2_cv
@@ -68,8 +68,7 @@ class Auto(SurrogateBase):
                       random_state=self.random_state)
         for name in self.candidates:
             cls = surrogates.get(name)
-            opts = {"bounds": self.bounds} if "bounds" in inspect.signature(cls).parameters \
-                else {}
+            opts = {"bounds": self.bounds} if "bounds" in options_model(cls).model_fields else {}
             est = make_surrogate(name, **opts)
             try:
                 self.scores_[name] = q2_cv(est, X, y, folds)

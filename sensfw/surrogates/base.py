@@ -27,24 +27,29 @@ declared members, which reports and validation read directly instead of probing:
 
 :class:`Surrogate` states this as a :class:`typing.Protocol`; :class:`SurrogateBase` gives
 the defaults (no summary, no coefficients, no cheap leave-one-out, no intervals), the input
-validation and the option checks. Options are declared in ``_parameter_constraints``
-(scikit-learn's parameter validation), so :func:`option_problems` reports a bad option of a
-study before anything runs.
+validation and the option checks. Options are declared in ``Options``
+(:mod:`sensfw.options`, the contract of every plugin kind), so a study's bad option is
+reported before anything runs; the constructor only stores them (scikit-learn's rule) and
+``fit`` checks them again.
 """
 
 from __future__ import annotations
 
-import inspect
-import re
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Annotated, Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.utils._param_validation import InvalidParameterError, validate_parameter_constraints
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..errors import OptionError
+from ..options import Int, describe, option_problems
+
+#: descriptions shared by the surrogates' declared options
+BOUNDS = "a list of (low, high) pairs, one per variable, or none (the data's range)"
+SEED = "an integer >= 0 or none"
+RandomState = Annotated[Int, Field(ge=0)] | None
 
 
 class SurrogateError(OptionError):
@@ -77,21 +82,20 @@ class SurrogateBase(RegressorMixin, BaseEstimator):
     """Defaults of the contract for the built-in surrogates (a third-party surrogate may
     inherit it or implement :class:`Surrogate` itself).
 
-    Subclasses set ``_parameter_constraints`` and, for constraints between options,
-    override :meth:`_check_options`; :meth:`fit` starts with :meth:`_begin_fit`, which
-    validates the options and the data, and ``predict`` with :meth:`_check_predict`.
+    Subclasses declare ``Options`` (:mod:`sensfw.options`: a type, a range and a
+    description per constructor argument; constraints between them as a model validator);
+    :meth:`fit` starts with :meth:`_begin_fit`, which checks the options and the data, and
+    ``predict`` with :meth:`_check_predict`.
     """
 
-    _parameter_constraints: ClassVar[dict] = {}
     loo_method: ClassVar[str | None] = None
 
-    def _check_options(self) -> None:
-        """Constraints between options; raise :class:`SurrogateError` naming the option."""
-
     def _begin_fit(self, X, y) -> tuple[np.ndarray, np.ndarray]:
-        """Validate options and data; reset the declared fitted attributes."""
-        self._validate_params()
-        self._check_options()
+        """Check options and data; reset the declared fitted attributes."""
+        problems = option_problems(type(self), self.get_params(deep=False))
+        if problems:
+            raise SurrogateError(f"{type(self).__name__}: {describe(problems)}",
+                                 option=problems[0][0], problems=problems)
         X, y = check_data(self, X, y, reset=True)
         self.summary_ = None
         self.coefficient_table_ = self.coefficient_table_coded_ = None
@@ -120,8 +124,6 @@ def check_data(est, X, y: Any = "no_validation", *, reset: bool):
         if isinstance(y, str) and y == "no_validation":
             return validate_data(est, X, reset=reset, dtype=np.float64)
         return validate_data(est, X, y, reset=reset, dtype=np.float64, y_numeric=True)
-    except InvalidParameterError:
-        raise
     except ValueError as err:
         raise SurrogateError(f"{type(est).__name__}: {err}") from None
 
@@ -147,46 +149,3 @@ def scaling(est, X: np.ndarray, bounds) -> tuple[np.ndarray, np.ndarray]:
     half = (hi - lo) / 2
     half = np.where(half > 0, half, 1.0)
     return (hi + lo) / 2, half
-
-
-_PARAM = re.compile(r"The '([^']+)' parameter")
-
-
-def option_problems(cls, options: dict[str, Any]) -> list[tuple[str | None, str]]:
-    """Every problem of ``options`` for the surrogate class ``cls``, as (option, message);
-    option None: the options together. Unknown options list the known ones; values are
-    checked against ``_parameter_constraints`` one by one (all reported), then the
-    constraints between options."""
-    if isinstance(cls, type) and issubclass(cls, BaseEstimator):
-        known = list(cls._get_param_names())
-    else:
-        known = [p for p in inspect.signature(cls).parameters if p not in ("self", "kwargs")]
-    problems: list[tuple[str | None, str]] = [
-        (k, f"unknown option; known: {', '.join(known) or '(none)'}")
-        for k in options if k not in known]
-    if problems:
-        return problems
-    try:
-        est = cls(**options)
-    except Exception as err:  # a third-party constructor may raise anything on a bad value
-        return [(getattr(err, "option", None), str(err))]
-    constraints = getattr(cls, "_parameter_constraints", {}) or {}
-    params = est.get_params(deep=False) if hasattr(est, "get_params") else options
-    for key, value in params.items():
-        if key not in constraints or constraints[key] == "no_validation":
-            continue
-        try:
-            validate_parameter_constraints({key: constraints[key]}, {key: value},
-                                           caller_name=cls.__name__)
-        except (InvalidParameterError, TypeError, ValueError) as err:
-            m = _PARAM.match(str(err))
-            problems.append((m.group(1) if m else key, str(err)))
-    if problems:
-        return problems
-    check = getattr(est, "_check_options", None)
-    if check is not None:
-        try:
-            check()
-        except Exception as err:
-            problems.append((getattr(err, "option", None), str(err)))
-    return problems

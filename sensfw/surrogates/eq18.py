@@ -21,15 +21,16 @@ default, which is the paper's Eq. 18.
 from __future__ import annotations
 
 from itertools import combinations
-from typing import ClassVar
+from typing import Literal
 
 import numpy as np
 import pandas as pd
-from sklearn.utils._param_validation import StrOptions
+from pydantic import Field, model_validator
 from sklearn.utils.validation import check_is_fitted
 
+from ..options import Bool, Pairs, PluginOptions, Str
 from ..plugins import surrogates
-from .base import SurrogateBase, SurrogateError, feature_names, scaling
+from .base import BOUNDS, SurrogateBase, SurrogateError, feature_names, scaling
 
 
 def design_matrix(X: np.ndarray, names: list[str], interaction: str = "product"):
@@ -103,13 +104,21 @@ class Eq18(SurrogateBase):
     prediction intervals from the OLS fit.
     """
 
-    _parameter_constraints: ClassVar[dict] = {
-        "interaction": [StrOptions({"product", "ratio"})],
-        "coding": [StrOptions({"coded", "physical"})],
-        "bounds": ["array-like", None],
-        "log_features": [StrOptions({"auto"}), "array-like", None],
-        "log_response": ["boolean"],
-    }
+    class Options(PluginOptions):
+        interaction: Literal["product", "ratio"] = Field(description="'product' or 'ratio'")
+        coding: Literal["coded", "physical"] = Field(description="'coded' or 'physical'")
+        bounds: Pairs = Field(description=BOUNDS)
+        log_features: Literal["auto"] | list[Str] | None = Field(
+            description="'auto', a list of variable names or none")
+        log_response: Bool = Field(description="true or false")
+
+        @model_validator(mode="after")
+        def _ratio_in_physical_units(self):
+            if self.interaction == "ratio" and self.coding != "physical":
+                raise SurrogateError("interaction 'ratio' (terms x_i/x_j) needs "
+                                     "coding='physical': coded values cross zero",
+                                     option="interaction")
+            return self
     loo_method = "hat matrix (PRESS)"
 
     def __init__(self, interaction: str = "product", coding: str = "coded", bounds=None,
@@ -120,18 +129,12 @@ class Eq18(SurrogateBase):
         self.log_features = log_features
         self.log_response = log_response
 
-    def _check_options(self):
-        if self.interaction == "ratio" and self.coding != "physical":
-            raise SurrogateError("Eq18: ratio terms x_i/x_j are only meaningful in physical "
-                                 "units (coded values cross zero); use coding='physical'",
-                                 option="interaction")
-
     def _logs(self, X: np.ndarray, names: list[str]) -> np.ndarray:
         """Which columns are regressed on log10 (decided at fit)."""
         lf = self.log_features
         if lf is None:
             return np.zeros(len(names), bool)
-        if isinstance(lf, str):  # "auto" (checked by _parameter_constraints)
+        if isinstance(lf, str):  # "auto" (checked by Options)
             lo, hi = (np.asarray(self.bounds, float).T if self.bounds is not None
                       else (X.min(axis=0), X.max(axis=0)))
             return (lo > 0) & (hi >= 10 * lo)

@@ -2,16 +2,16 @@
 
 from __future__ import annotations
 
-from numbers import Integral
-from typing import ClassVar
+from typing import Annotated, Any, Literal
 
 import numpy as np
+from pydantic import Field
 from scipy import stats
-from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from ..options import Bool, Int, Pairs, PluginOptions, Str
 from ..plugins import surrogates
-from .base import SurrogateBase, SurrogateError, feature_names, scaling
+from .base import BOUNDS, SEED, RandomState, SurrogateBase, SurrogateError, feature_names, scaling
 
 
 @surrogates.register("gaussian_process")
@@ -29,15 +29,15 @@ class GaussianProcess(SurrogateBase):
     more (contact stiffnesses, transition velocities), where a response usually varies
     evenly per decade."""
 
-    _parameter_constraints: ClassVar[dict] = {
-        "bounds": ["array-like", None],
-        "n_restarts_optimizer": [Interval(Integral, 0, None, closed="left")],
-        "random_state": ["random_state"],
-        "noise": ["boolean"],
-        "log_features": [StrOptions({"auto"}), "array-like", None],
-        "kernel": "no_validation",
-        "optimize": ["boolean"],
-    }
+    class Options(PluginOptions):
+        bounds: Pairs = Field(description=BOUNDS)
+        n_restarts_optimizer: Annotated[Int, Field(ge=0)] = Field(description="an integer >= 0")
+        random_state: RandomState = Field(description=SEED)
+        noise: Bool = Field(description="true or false")
+        log_features: Literal["auto"] | list[Str] | None = Field(
+            description="'auto', a list of variable names or none")
+        kernel: Any = Field(description="a fitted scikit-learn kernel to start from, or none")
+        optimize: Bool = Field(description="true or false")
     loo_method = "closed form (R&W Eq. 5.12)"
 
     def __init__(self, bounds=None, n_restarts_optimizer: int = 3, random_state: int = 0,

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from numbers import Integral
-from typing import ClassVar
+from typing import Annotated, Literal
 
 import numpy as np
-from sklearn.utils._param_validation import Interval, StrOptions
+from pydantic import Field
 
+from ..options import Int, Pairs, PluginOptions
 from ..plugins import surrogates
-from .base import SurrogateBase, SurrogateError, scaling
+from .base import BOUNDS, SurrogateBase, SurrogateError, scaling
 
 
 @surrogates.register("polynomial")
@@ -19,12 +19,11 @@ class Polynomial(SurrogateBase):
     least-angle regression with the penalty chosen by cross-validation, for few runs and
     many terms)."""
 
-    _parameter_constraints: ClassVar[dict] = {
-        "degree": [Interval(Integral, 1, None, closed="left")],
-        "selection": [StrOptions({"lars"}), None],
-        "bounds": ["array-like", None],
-        "cv": [Interval(Integral, 2, None, closed="left")],
-    }
+    class Options(PluginOptions):
+        degree: Annotated[Int, Field(ge=1)] = Field(description="an integer >= 1")
+        selection: Literal["lars"] | None = Field(description="'lars' or none")
+        bounds: Pairs = Field(description=BOUNDS)
+        cv: Annotated[Int, Field(ge=2)] = Field(description="an integer >= 2")
 
     def __init__(self, degree: int = 2, selection: str | None = None, bounds=None,
                  cv: int = 5):

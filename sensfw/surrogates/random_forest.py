@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from numbers import Integral
-from typing import ClassVar
+from typing import Annotated
 
-from sklearn.utils._param_validation import Interval
+from pydantic import Field
 from sklearn.utils.validation import check_is_fitted
 
+from ..options import Int, PluginOptions
 from ..plugins import surrogates
-from .base import SurrogateBase
+from .base import SEED, RandomState, SurrogateBase
 
 
 @surrogates.register("random_forest")
@@ -19,11 +19,10 @@ class RandomForest(SurrogateBase):
     predictions (each run predicted by the trees whose bootstrap sample missed it; Breiman
     2001), the bagging analogue of leave-one-out, instead of n refits."""
 
-    _parameter_constraints: ClassVar[dict] = {
-        "n_estimators": [Interval(Integral, 1, None, closed="left")],
-        "min_samples_leaf": [Interval(Integral, 1, None, closed="left")],
-        "random_state": ["random_state"],
-    }
+    class Options(PluginOptions):
+        n_estimators: Annotated[Int, Field(ge=1)] = Field(description="an integer >= 1")
+        min_samples_leaf: Annotated[Int, Field(ge=1)] = Field(description="an integer >= 1")
+        random_state: RandomState = Field(description=SEED)
     loo_method = "out-of-bag"
 
     def __init__(self, n_estimators: int = 300, min_samples_leaf: int = 1,

@@ -37,5 +37,5 @@ def test_design_contract(name):
     y = 5 * Z[:, 0] + 0.5 * Z[:, 3] + 0.01 * np.sin(np.arange(len(Z)))
     res = design.analyze(SPACE, a, y)
     assert res.ranking[0] == SPACE.names[0], res.table
-    with pytest.raises(DesignError, match=f"design '{name}': unknown option"):
+    with pytest.raises(DesignError, match=f"design '{name}': colour: unknown option; known: "):
         make_design(name, colour="red")

@@ -2,7 +2,7 @@
 at every place it fits through the model's hooks, with the physics it claims; the model holds
 no effect names; a third-party effect registered by entry point does what a built-in does."""
 
-import re
+import ast
 import sys
 import textwrap
 from pathlib import Path
@@ -13,6 +13,7 @@ import pytest
 from sensfw.effects import Effect
 from sensfw.errors import SensfwError
 from sensfw.excitation import Chirp
+from sensfw.models.bolted_beam import BoltedBeam
 from sensfw.models.contact import numpy_ops
 from sensfw.models.places import fitting_places
 from sensfw.models.planar import statics
@@ -39,8 +40,6 @@ def test_every_effect_attaches_at_every_place_it_fits_and_has_a_static_state():
         cls = effects.get(name)
         fits = fitting_places(places, cls)
         if not fits:  # a joint effect, or one that needs sliders: it fits the beam
-            from sensfw.models.bolted_beam import BoltedBeam
-
             assert fitting_places(BoltedBeam().places(), cls), name
             continue
         for place in fits:
@@ -67,19 +66,40 @@ def test_attach_names_a_real_place_of_a_fitting_kind():
     assert ShaftAssembly(effects=["clearance"]).effects[0].attach == "clutch_drive"
 
 
+def _strings_outside_preferred_places(tree: ast.AST) -> set[str]:
+    """String constants of a module, except in a ``preferred_places`` declaration."""
+    skip = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            if any(isinstance(t, ast.Name) and t.id == "preferred_places" for t in targets):
+                skip.update(id(n) for n in ast.walk(node))
+    return {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)
+            and isinstance(n.value, str) and id(n) not in skip}
+
+
 def test_the_model_holds_no_effect_names():
-    """The shaft model must not look effects or their parameters up by name."""
+    """The models must not look effects or their parameters up by name: the one place a
+    model names an effect is its ``preferred_places`` declaration (where such an effect
+    goes when it names no place), which the effects read through the model."""
     words = set()
     for name in effects.names():
         words.add(name)
         words.update(p.name for p in effects.get(name)().parameters())
     for path in (ROOT / "sensfw" / "models").rglob("*.py"):
         text = path.read_text()
-        for w in words:
-            assert not re.search(rf"[\"']{w}[\"']", text), (path.name, w)
+        named = words & _strings_outside_preferred_places(ast.parse(text))
+        assert not named, (path.name, named)
         for w in ("clearance_gap", "friction_mu", "hardening_increase", "preload_force",
                   "extra_damping", "flex_frequency"):
             assert w not in text, (path.name, w)
+    # and no effect names a model's place (a place named like a kind is left out: "joint")
+    places = {n for m in (ShaftAssembly(), BoltedBeam()) for n, pl in m.places().items()
+              if n != pl.kind}
+    for path in (ROOT / "sensfw" / "effects").rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        named = places & {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)}
+        assert not named, (path.name, named)
 
 
 def test_contact_hardening_changes_only_its_contact_and_keeps_the_force_at_0_1_um():

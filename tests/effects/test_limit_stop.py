@@ -51,8 +51,8 @@ def test_the_stop_force_is_the_piecewise_linear_clearance_law(shaft, d_um):
     q0 = model.equilibrium(p)
     mech, ref = model.mechanism(p), plain.mechanism(full(plain))
     mech.anchor(q0)
-    layout = mech.layout()
-    iy = layout.offset["C"] + 1
+    index = mech.coordinates()
+    iy = index.offset["C"] + 1
     d = d_um * 1e-6
     q = q0.copy()
     q[iy] += d
@@ -99,7 +99,7 @@ def test_a_cubic_spring_at_a_body_is_the_duffing_law_about_the_rest_position(d_u
     np.testing.assert_array_equal(q0, plain.equilibrium(full(plain)))
     mech, ref = model.mechanism(p), plain.mechanism(full(plain))
     mech.anchor(q0)
-    iy = mech.layout().offset["C"] + 1
+    iy = mech.coordinates().offset["C"] + 1
     d = d_um * 1e-6
     q = q0.copy()
     q[iy] += d

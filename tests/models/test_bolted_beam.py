@@ -201,9 +201,9 @@ def test_parameters_places_and_sensors():
 
 
 def test_points_off_the_reference_line_or_beyond_a_beam_are_clear_errors():
-    from sensfw.models.bolted_beam import layout
+    from sensfw.models.bolted_beam import mechanics
 
-    asm = layout.assembly(NOMINAL, Geometry())
+    asm = mechanics.assembly(NOMINAL, Geometry())
     with pytest.raises(SensfwError, match="reference line"):
         asm.add_mass("beam1", 0.01, (0.1, 0.003))
     with pytest.raises(SensfwError, match=r"x = 300 mm is not on beam1"):

@@ -229,8 +229,8 @@ def test_static_state_does_not_depend_on_what_the_process_solved_before():
         m.equilibrium(m.parameters().complete(other))
         assert np.array_equal(m.equilibrium(target), first)
     # and it is a static state: the residual forces vanish against gravity (mass * g, N)
-    layout = m.layout(target)
-    weight = float(np.sum(layout.masses()[layout.y_index()])) * 9.81
+    index = m.coordinates(target)
+    weight = float(np.sum(index.masses()[index.y_index()])) * 9.81
     assert np.max(np.abs(m.generalized_forces(first, np.zeros(len(first)), target))) \
         < 1e-9 * weight
 

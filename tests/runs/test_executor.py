@@ -1,8 +1,6 @@
 """Executors: results stream back one by one; hangs, crashes and failures become failed runs
 without losing the others."""
 
-import time
-
 import pytest
 from sensfw_test_models import FAULT_INJECTION
 
@@ -29,14 +27,16 @@ def specs(points, timeout=None):
 def test_process_pool_survives_crash_hang_and_divergence():
     points = [{"x1": 0.1}, {"x1": 3.0}, {"x2": 3.0}, {"x3": 3.0}, {"x1": -1.0}, {"x2": 1.0}]
     got = {}
-    t0 = time.monotonic()
     run_processes(specs(points, timeout=8.0), lambda s, r: got.__setitem__(s.key(), r),
                   workers=2)
-    assert time.monotonic() - t0 < 40  # the hang was cut at its 8 s timeout
     results = [got[s.key()] for s in specs(points)]
+    # every run has its result: the two after the crash, the hang and the divergence ran on
+    # replaced workers and finished
     assert [r.ok for r in results] == [True, False, False, False, True, True]
     assert "died" in results[1].error
-    assert "timeout" in results[2].error
+    # the 60 s hang was cut at the run's own 8 s timeout (a hang that ran out by itself
+    # would have returned a result, not this error)
+    assert results[2].error == "timeout: no result after 8 s"
     assert "diverged" in results[3].error
 
 

@@ -38,5 +38,5 @@ def test_scorer_contract(name, runs):
         assert np.array_equal(ref.channels[ch], before[1][ch])
     if s.needs_reference:
         assert all(v == 0 for v in s.score(ref, ref).values())  # no change against itself
-    with pytest.raises(SensfwError, match=f"scorer '{name}': unknown option"):
+    with pytest.raises(SensfwError, match=f"scorer '{name}': colour: unknown option; known: "):
         make_scorer(name, colour="red")

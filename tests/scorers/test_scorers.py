@@ -81,7 +81,8 @@ def test_order_amplitude_thd_and_rms():
 def test_unknown_scorer_and_bad_options_are_clear():
     with pytest.raises(UnknownPluginError, match=r"unknown scorer 'thdd'; available: .*thd"):
         scorers.get("thdd")
-    with pytest.raises(SensfwError, match="scorer 'thd': unknown option"):
+    with pytest.raises(SensfwError,
+                       match="scorer 'thd': harmonics: unknown option; known: detrend"):
         make_scorer("thd", harmonics=3)
     with pytest.raises(SensfwError, match="order must be an integer >= 1"):
         make_scorer("order_amplitude", order=0)

@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from sensfw.plugins import surrogates
 from sensfw.surrogates import SurrogateError, make_surrogate
 from sensfw.surrogates.eq18 import design_matrix
 
@@ -48,8 +49,11 @@ def test_coded_and_physical_forms_predict_the_same():
 
 
 def test_ratio_form_and_log_options():
-    with pytest.raises(SurrogateError, match="ratio terms"):
-        make_surrogate("eq18", interaction="ratio").fit(X, Y)
+    with pytest.raises(SurrogateError, match=r"'ratio' .* needs coding='physical'"):
+        make_surrogate("eq18", interaction="ratio")
+    # built directly (scikit-learn's rule: the constructor only stores), fit checks
+    with pytest.raises(SurrogateError, match=r"'ratio' .* needs coding='physical'"):
+        surrogates.get("eq18")(interaction="ratio").fit(X, Y)
     r = make_surrogate("eq18", interaction="ratio", coding="physical").fit(X, Y)
     assert "x1/x2" in list(r.coefficients_["term"])
     lg = make_surrogate("eq18", log_features="auto", log_response=True).fit(X, Y + 10)

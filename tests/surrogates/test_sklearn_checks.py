@@ -36,10 +36,9 @@ LIGHT = {"gaussian_process": {"n_restarts_optimizer": 0},
 SLOW = {"eq18", "auto", "gaussian_process"}
 
 
-def params():
-    for name in surrogates.names():
-        marks = [pytest.mark.slow] if name in SLOW else []
-        yield pytest.param(name, marks=marks, id=name)
+def params() -> list:
+    return [pytest.param(name, marks=[pytest.mark.slow] if name in SLOW else [], id=name)
+            for name in surrogates.names()]
 
 
 @pytest.mark.filterwarnings("ignore")

@@ -5,13 +5,13 @@
 * :mod:`.fe` — Euler-Bernoulli frame elements of the beams and their Craig-Bampton reduction;
 * :mod:`.assembly` — the hooks effects act through, and the reduced structure with numpy
   (forces, statics, linearisation);
-* :mod:`.layout` — the mechanics: beams, places (joint, clamp, beams), laws, force elements;
+* :mod:`.mechanics` — the mechanics: beams, places (joint, clamp, beams), laws, force elements;
 * :mod:`.simulation` — the Exudyn build and solve;
 * :mod:`.model` — :class:`BoltedBeam`.
 """
 
 from ...plugins import models
-from .layout import places
+from .mechanics import places
 from .model import BoltedBeam
 from .parameters import PARAMETERS, Geometry
 

@@ -22,9 +22,9 @@ import numpy as np
 
 from ...errors import SensfwError
 from ..contact import numpy_ops
-from ..places import ForceLaw, Place, Point
+from ..places import Place, Point
 from ..planar import Contacts, Link
-from ..planar.mechanism import anchored
+from ..planar.mechanism import LinkHooks, anchored
 from .fe import Beam, Mesh, Reduction, craig_bampton
 
 Key = tuple[str, float]  # (beam, x)
@@ -44,7 +44,7 @@ class BeamContacts(Contacts):
 
 
 @dataclass
-class BeamAssembly:
+class BeamAssembly(LinkHooks):
     """Beams, force elements, laws by place, places, point masses and added bodies.
 
     Implements :class:`~sensfw.models.places.Hooks`. ``required`` are points the model
@@ -67,28 +67,7 @@ class BeamAssembly:
         # the model's own force elements and laws, before effects (the structure's damping)
         self.base_links, self.base_laws = len(self.links), dict(self.laws)
 
-    # ---- hooks for effects ------------------------------------------------------------------
-    def contact_law(self, place: str):
-        try:
-            return self.laws[place]
-        except KeyError:
-            raise SensfwError(f"place {place!r} has no law; places with laws: "
-                              f"{', '.join(self.laws)}") from None
-
-    def set_contact_law(self, place: str, law) -> None:
-        self.contact_law(place)
-        self.laws[place] = law
-
-    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
-                  law: ForceLaw, about_static: bool = False) -> None:
-        self._check(body0, r0)
-        self._check(body1, r1)
-        if any(ln.name == name for ln in self.links):
-            raise SensfwError(f"a force element named {name!r} exists already")
-        self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
-                               lambda ops, u, v, contact: law(ops, u, v),
-                               about_static=about_static))
-
+    # ---- hooks for effects (and LinkHooks') -------------------------------------------------
     def add_jenkins(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
                     direction: Point, stiffness: float, slip_force: float) -> None:
         d = tuple(float(c) for c in direction)

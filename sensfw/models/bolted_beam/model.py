@@ -1,7 +1,7 @@
 """The bolted lap-joint beam (UNESP-BERT rig) as an Exudyn model.
 
 Two aluminium beams joined by a bolted half-lap joint, clamped at one end, driven by a
-shaker at 85 mm from the clamp (:mod:`.parameters` for the geometry, :mod:`.layout` for the
+shaker at 85 mm from the clamp (:mod:`.parameters` for the geometry, :mod:`.mechanics` for the
 mechanics). Outputs named like the measured channels: ``Acc1`` (free end), ``Acc2`` (below
 the joint, on beam2), ``Acc3`` (above it, on beam1), ``Acc4`` (near the clamp), transverse
 accelerations in m/s^2, and ``Laser``, the transverse velocity of the free end in m/s.
@@ -39,20 +39,21 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import asdict, replace
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
+from pydantic import Field
 
 from ...errors import DivergenceError, SimulationError
 from ...excitation import Excitation
+from ...options import PluginOptions
 from ...params import ParameterSet
-from ..base import Model, Signals, SolverSettings
+from ..base import EFFECTS, Model, Signals, SolverSettings, check_channels
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
-from ..places import Place, resolve_places
+from ..places import Place
 from ..stepsize import StepChoice, explicit_step, first_order_eigenvalues, grid_step
-from . import layout as mechanics
-from . import simulation
+from . import mechanics, simulation
 from .assembly import BeamAssembly, BeamContacts, Structure, modal_damping, solve_static
 from .parameters import PARAMETERS, Geometry
 
@@ -76,36 +77,38 @@ class BoltedBeam(Model):
     units: ClassVar[dict[str, str]] = {"Acc1": "m/s^2", "Acc2": "m/s^2", "Acc3": "m/s^2",
                                        "Acc4": "m/s^2", "Laser": "m/s"}
 
-    def __init__(self, geometry: Geometry | dict | None = None, effects: tuple = ()):
-        from ...effects import make_effect
+    #: where an effect goes without ``attach``: the joint's effects at the joint (the only
+    #: joint), dry friction at beam1 (the shaker's drive point)
+    preferred_places: ClassVar[dict[str, tuple[str, ...]]] = {
+        "cubic_stiffness": ("joint",), "dry_friction": ("beam1",)}
 
+    class Options(PluginOptions):
+        geometry: Geometry | None = Field(
+            None, description="a table of the fixed data (Geometry's fields) or none")
+        effects: list[Any] = Field((), description=EFFECTS)
+
+    def __init__(self, geometry: Geometry | dict | None = None, effects: tuple = ()):
         if isinstance(geometry, dict):
             geometry = Geometry(**{k: tuple(v) if isinstance(v, list) else v
                                    for k, v in geometry.items()})
         self.geometry = geometry or Geometry()
-        self.effects = tuple(make_effect(e) for e in effects)
-        self._attached = resolve_places(self.places(), self.effects, self.name)
+        super().__init__(effects)
 
     # ---- declarations ------------------------------------------------------------------------
     def parameters(self) -> ParameterSet:
-        extra = [p for e in self.effects for p in e.parameters()]
-        return ParameterSet([*PARAMETERS.values(), *extra]) if extra else PARAMETERS
+        return self.with_effect_parameters(PARAMETERS)
 
     def places(self) -> dict[str, Place]:
         return mechanics.places(self.geometry)
 
     def options(self) -> dict:
-        opts: dict = {"geometry": asdict(self.geometry)}
-        if self.effects:
-            opts["effects"] = [e.spec() for e in self.effects]
-        return opts
+        return {"geometry": asdict(self.geometry), **self.effect_options()}
 
     # ---- mechanics ---------------------------------------------------------------------------
     def assembly(self, p: Mapping[str, float]) -> BeamAssembly:
         """The assembly for full parameter values ``p`` with every effect applied."""
         asm = mechanics.assembly(p, self.geometry)
-        for effect, place in self._attached:
-            effect.apply(place, asm, p)
+        self.apply_effects(asm, p)
         return asm
 
     def structure(self, p: Mapping[str, float], asm: BeamAssembly | None = None) -> Structure:
@@ -227,13 +230,7 @@ class BoltedBeam(Model):
                 newton = "full"
         if not channels:
             raise SimulationError(self.name, "Exudyn solver did not finish", p)
-        for name, x in channels.items():
-            if len(x) != n_out or not np.all(np.isfinite(x)):
-                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p,
-                                      step=choice.step)
-            if np.max(np.abs(x)) > 1e7:
-                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7)", p,
-                                      step=choice.step)
+        check_channels(self.name, channels, n_out, p, choice.step)
         t = excitation.time()
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),

@@ -43,14 +43,14 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
     import exudyn as exu
     from exudyn import itemInterface as ei
 
-    layout = mech.layout()
+    index = mech.coordinates()
     mech.anchor(q0)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     bodies = {mech.ground: mbs.AddObject(ei.ObjectGround())}
     reference = {mech.ground: (0.0, 0.0)}
-    for b in layout.bodies.values():
-        i = layout.offset[b.name]
+    for b in index.bodies.values():
+        i = index.offset[b.name]
         q_init = list(q0[i:i + b.ndof])
         if b.ndof == 3:
             node = mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[*b.ref, 0.0],
@@ -80,7 +80,7 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
             offset=[0, 0, 0], name=ln.name))
         uf = link_function(ln, off, ops, contact, user_functions)
         keep.append(user_function(mbs, co, uf, "springForceUserFunction", user_functions))
-    for b in layout.bodies:
+    for b in index.bodies:
         mb = mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=bodies[b]))
         mbs.AddLoad(ei.LoadMassProportional(markerNumber=mb, loadVector=[0, -G, 0]))
     for body, r, force in loads:

@@ -117,8 +117,9 @@ def plus(x, y):
     return x if y is None else x + y
 
 
-class Layout:
-    """Coordinate layout of a list of bodies: ``offset[name]`` is the index of its x."""
+class CoordinateIndex:
+    """Where each body's coordinates start in the state vector of a list of bodies:
+    ``offset[name]`` is the index of its x (then y, and theta for a rigid body)."""
 
     def __init__(self, bodies: list[Body]):
         self.bodies = {b.name: b for b in bodies}
@@ -144,16 +145,16 @@ class Layout:
 class State:
     """Small-rotation kinematics of body points and assembly of generalised forces."""
 
-    def __init__(self, layout: Layout, ground: str, q, qd):
-        self.layout, self.ground, self.q, self.qd = layout, ground, q, qd
-        self.f = np.zeros(layout.n)
+    def __init__(self, index: CoordinateIndex, ground: str, q, qd):
+        self.index, self.ground, self.q, self.qd = index, ground, q, qd
+        self.f = np.zeros(index.n)
 
     def point(self, body: str, r: Point):
         """Displacement and velocity (ux, uy, vx, vy) of the body point at ``r``."""
         if body == self.ground:
             return 0.0, 0.0, 0.0, 0.0
-        i, q, qd = self.layout.offset[body], self.q, self.qd
-        if self.layout.bodies[body].ndof == 2:
+        i, q, qd = self.index.offset[body], self.q, self.qd
+        if self.index.bodies[body].ndof == 2:
             return q[i], q[i + 1], qd[i], qd[i + 1]
         th, thd = q[i + 2], qd[i + 2]
         return q[i] - th * r[1], q[i + 1] + th * r[0], qd[i] - thd * r[1], qd[i + 1] + thd * r[0]
@@ -161,15 +162,48 @@ class State:
     def apply(self, body: str, r: Point, fx: float, fy: float) -> None:
         if body == self.ground:
             return
-        i = self.layout.offset[body]
+        i = self.index.offset[body]
         self.f[i] += fx
         self.f[i + 1] += fy
-        if self.layout.bodies[body].ndof == 3:
+        if self.index.bodies[body].ndof == 3:
             self.f[i + 2] += r[0] * fy - r[1] * fx
 
 
+class LinkHooks:
+    """The :class:`~sensfw.models.places.Hooks` that act on an assembly's ``laws`` (by place)
+    and ``links`` (force elements), shared by :class:`Mechanism` and the bolted beam's
+    assembly; ``_check(body, r)`` raises when ``r`` is not a point of ``body``."""
+
+    laws: dict
+    links: list[Link]
+
+    def _check(self, body: str, r: Point) -> None:
+        raise NotImplementedError
+
+    def contact_law(self, place: str) -> ContactLaw:
+        try:
+            return self.laws[place]
+        except KeyError:
+            raise SensfwError(f"place {place!r} has no law; places with laws: "
+                              f"{', '.join(self.laws)}") from None
+
+    def set_contact_law(self, place: str, law: ContactLaw) -> None:
+        self.contact_law(place)
+        self.laws[place] = law
+
+    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
+                  law: ForceLaw, about_static: bool = False) -> None:
+        self._check(body0, r0)
+        self._check(body1, r1)
+        if any(ln.name == name for ln in self.links):
+            raise SensfwError(f"a force element named {name!r} exists already")
+        self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
+                               lambda ops, u, v, contact: law(ops, u, v),
+                               about_static=about_static))
+
+
 @dataclass
-class Mechanism:
+class Mechanism(LinkHooks):
     """One parameter set's assembly: bodies, links, contact laws by place, places.
 
     Implements :class:`~sensfw.models.places.Hooks` for effects. ``follows`` records, for
@@ -183,28 +217,7 @@ class Mechanism:
     ground: str = "H"
     follows: dict[str, tuple[str, Point]] = field(default_factory=dict)
 
-    # ---- hooks for effects ------------------------------------------------------------------
-    def contact_law(self, place: str) -> ContactLaw:
-        try:
-            return self.laws[place]
-        except KeyError:
-            raise SensfwError(f"place {place!r} has no contact law; contact places: "
-                              f"{', '.join(self.laws)}") from None
-
-    def set_contact_law(self, place: str, law: ContactLaw) -> None:
-        self.contact_law(place)
-        self.laws[place] = law
-
-    def add_force(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
-                  law: ForceLaw, about_static: bool = False) -> None:
-        for b in (body0, body1):
-            self._body(b)
-        if any(ln.name == name for ln in self.links):
-            raise SensfwError(f"a force element named {name!r} exists already")
-        self.links.append(Link(name, body0, tuple(r0), body1, tuple(r1),
-                               lambda ops, u, v, contact: law(ops, u, v),
-                               about_static=about_static))
-
+    # ---- hooks for effects (and LinkHooks') -------------------------------------------------
     def add_jenkins(self, name: str, body0: str, r0: Point, body1: str, r1: Point,
                     direction: Point, stiffness: float, slip_force: float) -> None:
         raise SensfwError(f"{type(self).__name__} has no Jenkins elements (a spring in series "
@@ -225,6 +238,9 @@ class Mechanism:
         self.bodies = [replace(x, mass=x.mass + mass, inertia=x.inertia + extra_inertia)
                        if x.name == body else x for x in self.bodies]
 
+    def _check(self, body: str, r: Point) -> None:
+        self._body(body)
+
     def _body(self, name: str) -> Body:
         for b in self.bodies:
             if b.name == name:
@@ -234,14 +250,14 @@ class Mechanism:
         raise SensfwError(f"no body {name!r}; bodies: {', '.join(b.name for b in self.bodies)}")
 
     # ---- evaluation -------------------------------------------------------------------------
-    def layout(self) -> Layout:
-        return Layout(self.bodies)
+    def coordinates(self) -> CoordinateIndex:
+        return CoordinateIndex(self.bodies)
 
-    def generalized_forces(self, q, qd, contact, ops, layout: Layout | None = None
+    def generalized_forces(self, q, qd, contact, ops, index: CoordinateIndex | None = None
                            ) -> np.ndarray:
         """Link and gravity forces on the coordinates (numpy, SI, no excitation)."""
-        layout = layout or self.layout()
-        st = State(layout, self.ground, np.asarray(q, float), np.asarray(qd, float))
+        index = index or self.coordinates()
+        st = State(index, self.ground, np.asarray(q, float), np.asarray(qd, float))
         for ln in self.links:
             if ln.about_static and ln.offset is None:
                 continue  # solving the static state: the link carries no static force
@@ -252,8 +268,8 @@ class Mechanism:
                             contact)
             st.apply(ln.body1, ln.r1, fx, fy)
             st.apply(ln.body0, ln.r0, -fx, -fy)
-        iy = layout.y_index()
-        st.f[iy] -= layout.masses()[iy] * G
+        iy = index.y_index()
+        st.f[iy] -= index.masses()[iy] * G
         return st.f
 
     def anchor(self, q0: np.ndarray | None) -> None:
@@ -262,14 +278,14 @@ class Mechanism:
         if q0 is None:
             self.links = anchored(self.links, None)
             return
-        st = State(self.layout(), self.ground, np.asarray(q0, float), np.zeros(len(q0)))
+        st = State(self.coordinates(), self.ground, np.asarray(q0, float), np.zeros(len(q0)))
         self.links = anchored(self.links, lambda body, r: st.point(body, r)[:2])
 
-    def follow(self, layout: Layout, q: np.ndarray) -> None:
+    def follow(self, index: CoordinateIndex, q: np.ndarray) -> None:
         """Set the coordinates of bodies added by effects to the displacement of the point
         they follow (in place)."""
         for name, (body, r) in self.follows.items():
-            st = State(layout, self.ground, q, np.zeros_like(q))
+            st = State(index, self.ground, q, np.zeros_like(q))
             ux, uy, _, _ = st.point(body, r)
-            i = layout.offset[name]
+            i = index.offset[name]
             q[i:i + 2] = ux, uy

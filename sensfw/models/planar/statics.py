@@ -10,7 +10,7 @@ import numpy as np
 from ...errors import SimulationError
 from ..contact import numpy_ops
 from ..places import ContactLaw
-from .mechanism import Contacts, Layout, Mechanism
+from .mechanism import Contacts, CoordinateIndex, Mechanism
 
 #: scipy ``least_squares`` (method, x_scale) tried in turn for the static state; see
 #: :func:`equilibrium` for why MINPACK ``lm`` is not among them.
@@ -70,11 +70,12 @@ class LinearContacts:
         return None
 
 
-def forces(mech: Mechanism, q, qd, contact=None, layout: Layout | None = None) -> np.ndarray:
+def forces(mech: Mechanism, q, qd, contact=None, index: CoordinateIndex | None = None
+           ) -> np.ndarray:
     """Generalised link and gravity forces (numpy); ``contact`` defaults to the nonlinear
     laws."""
     ops = numpy_ops()
-    return mech.generalized_forces(q, qd, contact or Contacts(ops, mech.laws), ops, layout)
+    return mech.generalized_forces(q, qd, contact or Contacts(ops, mech.laws), ops, index)
 
 
 def equilibrium(mech: Mechanism, guess: np.ndarray, model: str = "model",
@@ -95,18 +96,18 @@ def equilibrium(mech: Mechanism, guess: np.ndarray, model: str = "model",
     """
     from scipy.optimize import least_squares
 
-    layout = mech.layout()
+    index = mech.coordinates()
     mech.anchor(None)  # links centred on the static state carry no static force
-    zero = np.zeros(layout.n)
-    scale = np.full(layout.n, 1e-5)
-    scale[layout.rotation_index()] = 1e-4
+    zero = np.zeros(index.n)
+    scale = np.full(index.n, 1e-5)
+    scale[index.rotation_index()] = 1e-4
     contact = Contacts(numpy_ops(), mech.laws)
 
     def res(z):
-        return forces(mech, z * scale, zero, contact, layout)
+        return forces(mech, z * scale, zero, contact, index)
 
     start = np.array(guess, float)
-    mech.follow(layout, start)
+    mech.follow(index, start)
     best = None
     for method, x_scale in EQUILIBRIUM_SOLVERS:
         sol = least_squares(res, start / scale, method=method, x_scale=x_scale, xtol=1e-15,
@@ -135,19 +136,19 @@ def linear_matrices(mech: Mechanism, q0: np.ndarray, contact=None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mass, stiffness and damping matrices at the static state ``q0`` (central differences
     of the numpy forces; friction enters the damping through ``mu'(0)``)."""
-    layout = mech.layout()
+    index = mech.coordinates()
     mech.anchor(q0)
     contact = contact or Contacts(numpy_ops(), mech.laws)
-    rot = set(layout.rotation_index())
+    rot = set(index.rotation_index())
     n = len(q0)
     K, D, z = np.zeros((n, n)), np.zeros((n, n)), np.zeros(n)
     for i in range(n):
         e = np.zeros(n)
         e[i] = 1e-10 if i not in rot else 1e-9
         h = e[i]
-        K[:, i] = -(forces(mech, q0 + e, z, contact, layout)
-                    - forces(mech, q0 - e, z, contact, layout)) / (2 * h)
+        K[:, i] = -(forces(mech, q0 + e, z, contact, index)
+                    - forces(mech, q0 - e, z, contact, index)) / (2 * h)
         ev = e * (1e-9 / h)
-        D[:, i] = -(forces(mech, q0, ev, contact, layout)
-                    - forces(mech, q0, -ev, contact, layout)) / 2e-9
-    return np.diag(layout.masses()), K, D
+        D[:, i] = -(forces(mech, q0, ev, contact, index)
+                    - forces(mech, q0, -ev, contact, index)) / 2e-9
+    return np.diag(index.masses()), K, D

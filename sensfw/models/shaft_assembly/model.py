@@ -1,7 +1,7 @@
 """The benchmark model: a nested output-shaft assembly with contacts, simulated with Exudyn.
 
 An analogue of the paper's e-bike output shaft (Sect. 2.2, Fig. 2, Fig. 6); its mechanics are
-in :mod:`.layout`, its parameters (Table 1) in :mod:`.table1`. The shaker pushes the
+in :mod:`.mechanics`, its parameters (Table 1) in :mod:`.table1`. The shaker pushes the
 crankshaft radially at its end with the excitation force; accelerometers sit on C (axial, the
 paper's output; radial) and on D (axial, radial).
 
@@ -11,7 +11,7 @@ evaluates it in C++ inside its explicit RK4 integrator, with no Python in the ti
 (``bench/model.py`` compares with the same model built with Python user functions). The same
 force laws evaluate with numpy for the static equilibrium the simulation starts from.
 
-Effects (:mod:`sensfw.effects`) act at the model's places (:func:`.layout.places`) through the
+Effects (:mod:`sensfw.effects`) act at the model's places (:func:`.mechanics.places`) through the
 hooks of :class:`~sensfw.models.planar.Mechanism`; the model applies them without knowing
 their names.
 """
@@ -21,23 +21,24 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import asdict, replace
+from typing import Any, ClassVar
 
 import numpy as np
+from pydantic import Field
 
-from ...errors import DivergenceError, SimulationError
+from ...errors import SimulationError
 from ...excitation import Excitation
-from ...params import ParameterSet
-from ..base import Model, Signals, SolverSettings
+from ...options import Bool, PluginOptions
+from ...params import MM, ParameterSet
+from ..base import EFFECTS, Model, Signals, SolverSettings, check_channels
 from ..contact import numpy_ops, symbolic_ops
 from ..drive import LoadSignal
-from ..places import Place, resolve_places
-from ..planar import Contacts, Layout, Mechanism, statics
+from ..places import Place
+from ..planar import Contacts, CoordinateIndex, Mechanism, statics
 from ..planar import exudyn as planar_exudyn
 from ..stepsize import StepChoice, choose_integration, first_order_eigenvalues, grid_step
-from . import layout as mechanics
+from . import mechanics
 from .table1 import GROUPS, PARAMETERS, Geometry
-
-MM = mechanics.MM
 
 
 class ShaftAssembly(Model):
@@ -58,19 +59,33 @@ class ShaftAssembly(Model):
     sensors = ("crank_axial", "crank_radial", "drive_axial", "drive_radial")
     default_output = "crank_axial"
 
-    def __init__(self, linearised: bool = False, geometry: Geometry | None = None,
-                 effects: tuple = ()):
-        from ...effects import make_effect
+    #: where an effect goes without ``attach``: play and friction at the clutch's guide,
+    #: hardening at roller bearing L1, damping at L3, the body effects at the crankshaft
+    preferred_places: ClassVar[dict[str, tuple[str, ...]]] = {
+        "clearance": ("clutch_drive",), "friction": ("clutch_drive",),
+        "contact_hardening": ("bearing_l1",), "damping": ("bearing_l3",),
+        **dict.fromkeys(("preload", "added_mass", "flexible_mode", "limit_stop",
+                         "cubic_stiffness"), ("crankshaft",)),
+    }
 
+    class Options(PluginOptions):
+        linearised: Bool = Field(False, description="true or false")
+        geometry: Geometry | None = Field(
+            None, description="a table of the fixed data (Geometry's fields) or none")
+        effects: list[Any] = Field((), description=EFFECTS)
+
+    def __init__(self, linearised: bool = False, geometry: Geometry | dict | None = None,
+                 effects: tuple = ()):
+        if isinstance(geometry, dict):
+            geometry = Geometry(**{k: tuple(v) if isinstance(v, list) else v
+                                   for k, v in geometry.items()})
         self.linearised = bool(linearised)
         self.geometry = geometry or Geometry()
-        self.effects = tuple(make_effect(e) for e in effects)
-        self._attached = resolve_places(self.places(), self.effects, self.name)
+        super().__init__(effects)
 
     # ---- declarations ------------------------------------------------------------------------
     def parameters(self) -> ParameterSet:
-        extra = [p for e in self.effects for p in e.parameters()]
-        return ParameterSet([*PARAMETERS.values(), *extra]) if extra else PARAMETERS
+        return self.with_effect_parameters(PARAMETERS)
 
     def groups(self) -> dict[str, tuple[str, ...]]:
         return dict(GROUPS)
@@ -79,21 +94,19 @@ class ShaftAssembly(Model):
         return mechanics.places(self.geometry)
 
     def options(self) -> dict:
-        opts: dict = {"linearised": self.linearised, "geometry": asdict(self.geometry)}
-        if self.effects:
-            opts["effects"] = [e.spec() for e in self.effects]
-        return opts
+        return {"linearised": self.linearised, "geometry": asdict(self.geometry),
+                **self.effect_options()}
 
     # ---- mechanics ---------------------------------------------------------------------------
     def mechanism(self, p: Mapping[str, float]) -> Mechanism:
         """The assembly for full parameter values ``p`` with every effect applied."""
         mech = mechanics.mechanism(p, self.geometry)
-        for effect, place in self._attached:
-            effect.apply(place, mech, p)
+        self.apply_effects(mech, p)
         return mech
 
-    def layout(self, p: Mapping[str, float]) -> Layout:
-        return self.mechanism(p).layout()
+    def coordinates(self, p: Mapping[str, float]) -> CoordinateIndex:
+        """Where each body's coordinates start in the state vector (parameter values ``p``)."""
+        return self.mechanism(p).coordinates()
 
     def generalized_forces(self, q, qd, p: Mapping[str, float], contact=None) -> np.ndarray:
         """Static and contact forces on the coordinates (numpy, SI, no excitation)."""
@@ -111,7 +124,7 @@ class ShaftAssembly(Model):
         th_d = (c1 - c3) / (g.x_l3 - g.x_l1)
         y_d = -c1 - th_d * g.x_l1
         x_d = (p["bearing_preload"] / g.bearing_axial_k) ** (1 / g.bearing_axial_b) * MM
-        guess = np.zeros(mech.layout().n)
+        guess = np.zeros(mech.coordinates().n)
         guess[:8] = [x_d, y_d, th_d, x_d, y_d - cs, th_d, x_d, y_d + th_d * g.x_clutch]
         return statics.equilibrium(mech, guess, self.name, p)
 
@@ -170,13 +183,7 @@ class ShaftAssembly(Model):
             channels, stats = planar_exudyn.solve(built, excitation.fs, n_out, choice)
         except exu.SolverError as exc:
             raise SimulationError(self.name, f"Exudyn solver error: {exc}", p) from None
-        for name, x in channels.items():
-            if len(x) != n_out or not np.all(np.isfinite(x)):
-                raise DivergenceError(self.name, f"diverged (non-finite {name!r})", p,
-                                      step=choice.step)
-            if np.max(np.abs(x)) > 1e7:
-                raise DivergenceError(self.name, f"diverged ({name!r} exceeds 1e7 m/s^2)", p,
-                                      step=choice.step)
+        check_channels(self.name, channels, n_out, p, choice.step, unit="m/s^2")
         t = excitation.time()
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),

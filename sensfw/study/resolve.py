@@ -1,35 +1,9 @@
-"""Declarative study files (TOML) and their validation.
-
-A study names a model, overrides parameter bounds (values with units, parsed with pint),
-groups parameters into design variables, sets the excitation, solver and execution, and
-lists stages (design + scorers + selection or surrogates). Every problem in a file is
-reported at once with its dotted path (``parameters.clutch_drive_damping.max: ...``) as a
-:class:`~sensfw.errors.StudyError`; the command line prints them and exits with status 2.
-
-Example (``studies/quick.toml``)::
-
-    [study]
-    name = "quick"
-    [model]
-    name = "shaft_assembly"
-    output = "crank_axial"
-    [excitation]
-    f0 = "50 Hz"
-    f1 = "5 kHz"
-    ...
-    [[stages]]
-    name = "screen"
-    design = "oat"
-    scorers = [{ name = "frf_scalar" }]
-    select = { by = "frf_scalar", threshold = 0.1, max_variables = 3 }
-
-The file's schema (pydantic models, one per section) is :mod:`sensfw.study_schema`; the
-checks of the stages and their plugins are in :mod:`sensfw.study_checks`.
-"""
+"""The :class:`Study`: a study file's content resolved against the model and the
+registries (model, parameters with their bound overrides, groups, excitation, solver), with
+every problem of the file reported at once (:mod:`sensfw.study`)."""
 
 from __future__ import annotations
 
-import functools
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -37,55 +11,14 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from .errors import SensfwError, StudyError, UnknownPluginError
-from .excitation import Excitation, make_excitation
-from .models.base import IMPLICIT_METHODS, Model, SolverSettings
-from .models.stepsize import CALIBRATED_METHODS
-from .params import DesignSpace, Parameter, ParameterSet
-from .study_schema import (  # noqa: F401  (re-exported: the schema's names)
-    CalibrationSection,
-    ExcitationSection,
-    ExecutionSection,
-    GainSection,
-    ModelSection,
-    ParameterOverride,
-    Quantity,
-    ScorerSpec,
-    SelectSpec,
-    SolverSection,
-    StageSpec,
-    StudyFile,
-    StudyInfo,
-    SurrogateSpec,
-)
-
-
-@functools.cache
-def units():
-    import pint
-
-    return pint.UnitRegistry()
-
-
-def to_unit(value: Quantity, unit: str) -> float:
-    """``value`` ("7.05e5 N/mm", or a bare number meaning ``unit``) as a float in ``unit``."""
-    if isinstance(value, bool):
-        raise ValueError(f"expected a number or a quantity string, got {value!r}")
-    if isinstance(value, (int, float)):
-        return float(value)
-    import pint
-
-    try:
-        q = units().Quantity(value.strip())
-        if isinstance(q, (int, float)):
-            return float(q)
-        return float(q.to(unit or "dimensionless").magnitude)
-    except pint.DimensionalityError:
-        raise ValueError(f"cannot convert {value!r} to {unit or 'a plain number'}") from None
-    except (pint.UndefinedUnitError, pint.errors.DefinitionSyntaxError, ValueError,
-            AttributeError, TypeError, AssertionError) as err:
-        raise ValueError(f"cannot read {value!r} as a quantity in {unit or '1'}: {err}") \
-            from None
+from ..errors import SensfwError, StudyError
+from ..excitation import Excitation, make_excitation
+from ..models.base import IMPLICIT_METHODS, Model, SolverSettings
+from ..models.stepsize import CALIBRATED_METHODS
+from ..params import DesignSpace, Parameter, ParameterSet
+from .checks import Problems, bound_overrides, check_stages, plugin_problems
+from .schema import GainSection, StageSpec, StudyFile
+from .units import to_unit
 
 
 def _without(data: Any, locs: list[tuple]) -> Any:
@@ -125,9 +58,13 @@ class Study:
         self.parameters = self._resolve_parameters(problems)
         self.solver = self._resolve_solver(problems)
         self.groups = self._resolve_groups(problems)
-        self.stage_bounds = {}
-        self._check_stages(problems)
+        found, self.stage_bounds = check_stages(
+            spec.stages, parameters=self.parameters, groups=self.groups,
+            excitation=self.excitation,
+            sensors=None if self.model is None else self.model.sensors)
+        problems += found
         self.calibration_bounds = self._check_calibration(problems)
+        self._check_comparison(problems)
         if problems:
             raise StudyError(problems, source)
 
@@ -161,21 +98,13 @@ class Study:
         return cls.from_dict(data, str(path))
 
     # ---- resolution --------------------------------------------------------------------------
-    def _resolve_model(self, problems) -> Model | None:
-        from .plugins import models
+    def _resolve_model(self, problems: Problems) -> Model | None:
+        from ..plugins import models
 
-        try:
-            cls = models.get(self.spec.model.name)
-        except UnknownPluginError as err:
-            problems.append(("model.name", str(err)))
-            return None
-        try:
-            model = cls(**self.spec.model.options)
-        except TypeError as err:
-            problems.append(("model.options", f"not accepted by {self.spec.model.name}: {err}"))
-            return None
-        except SensfwError as err:  # e.g. an unknown effect or attach point
-            problems.append(("model.options", str(err)))
+        model, found = plugin_problems(models, self.spec.model.name, self.spec.model.options,
+                                       "model.options", name_at="model.name")
+        problems += found
+        if model is None:
             return None
         out = self.spec.model.output or model.default_output
         if out not in model.sensors:
@@ -190,64 +119,18 @@ class Study:
         declared = self.model.parameters()
         if self.gain is not None:
             declared = ParameterSet([*declared.values(), self.gain])
-        changes, ok = self._overrides(self.spec.parameters, declared, "parameters", problems)
-        if not ok:
-            return None
+        changes, found = bound_overrides(self.spec.parameters, declared, "parameters")
         own = self.model.parameters()
         for name, vals in changes.items():  # the model refuses values outside its own range
             if name not in own:
                 continue
             p = own[name]
-            for field_name, v in vals.items():
-                if not p.min <= v <= p.max:
-                    problems.append((f"parameters.{name}.{field_name}",
-                                     f"{v:g} {p.unit} is outside the range the model "
-                                     f"{self.spec.model.name} accepts, [{p.min:g}, "
-                                     f"{p.max:g}] {p.unit}"))
-                    ok = False
-        if not ok:
-            return None
-        try:
-            return declared.with_bounds(changes)
-        except Exception as err:  # unreachable after the checks above, kept defensive
-            problems.append(("parameters", str(err)))
-            return None
-
-    @staticmethod
-    def _overrides(overrides: Mapping[str, ParameterOverride], declared: ParameterSet,
-                   prefix: str, problems) -> tuple[dict, bool]:
-        ok = True
-        changes: dict[str, dict[str, float]] = {}
-        for name, ov in overrides.items():
-            if name not in declared:
-                problems.append((f"{prefix}.{name}", f"unknown parameter; the model has "
-                                                     f"{', '.join(declared)}"))
-                ok = False
-                continue
-            p = declared[name]
-            vals = {}
-            for field_name in ("nominal", "min", "max"):
-                raw = getattr(ov, field_name)
-                if raw is None:
-                    continue
-                try:
-                    vals[field_name] = to_unit(raw, p.unit)
-                except ValueError as err:
-                    problems.append((f"{prefix}.{name}.{field_name}", str(err)))
-                    ok = False
-            lo = vals.get("min", p.min)
-            hi = vals.get("max", p.max)
-            nom = vals.get("nominal", p.nominal)
-            if lo > hi:
-                problems.append((f"{prefix}.{name}.max",
-                                 f"max {hi:g} {p.unit} is below min {lo:g} {p.unit}"))
-                ok = False
-            elif not lo <= nom <= hi:
-                problems.append((f"{prefix}.{name}.nominal",
-                                 f"nominal {nom:g} {p.unit} outside [{lo:g}, {hi:g}] {p.unit}"))
-                ok = False
-            changes[name] = vals
-        return changes, ok
+            found += [(f"parameters.{name}.{field_name}",
+                       f"{v:g} {p.unit} is outside the range the model "
+                       f"{self.spec.model.name} accepts, [{p.min:g}, {p.max:g}] {p.unit}")
+                      for field_name, v in vals.items() if not p.min <= v <= p.max]
+        problems += found
+        return None if found else declared.with_bounds(changes)
 
     def _resolve_excitation(self, problems) -> Excitation | None:
         e = self.spec.excitation
@@ -280,7 +163,7 @@ class Study:
             vals["seed"] = e.seed
         try:
             return make_excitation({"kind": e.kind, **vals})
-        except Exception as err:
+        except SensfwError as err:
             problems.append(("excitation", str(err)))
             return None
 
@@ -357,13 +240,6 @@ class Study:
             return []
         return DesignSpace.from_parameters(self.parameters, self.groups).names
 
-    def _check_stages(self, problems) -> None:
-        """Stages, with every design, scorer and surrogate built with its options
-        (:mod:`sensfw.study_checks`)."""
-        from .study_checks import check_stages
-
-        check_stages(self, problems)
-
     def _check_calibration(self, problems) -> dict:
         cal = self.spec.calibration
         if cal is None or self.parameters is None:
@@ -374,8 +250,8 @@ class Study:
                 problems.append((f"calibration.parameters[{i}]",
                                  f"unknown design variable {name!r}; known: "
                                  f"{', '.join(sorted(known))}"))
-        changes, _ = self._overrides(cal.bounds, self.parameters, "calibration.bounds",
-                                     problems)
+        changes, found = bound_overrides(cal.bounds, self.parameters, "calibration.bounds")
+        problems += found
         return changes
 
     def calibration_space(self, variables: list[str]) -> DesignSpace:
@@ -383,6 +259,19 @@ class Study:
         ``[calibration]`` bounds."""
         return DesignSpace.from_parameters(self.parameters, self.groups, select=variables,
                                            bounds=self.calibration_bounds)
+
+    def _check_comparison(self, problems) -> None:
+        """``[compare_with]``: the reference exists and maps onto a stage's variables and
+        scorers (:func:`sensfw.analysis.paper_comparison.check_study`); ``[agree_with]``:
+        its stages exist here (:func:`sensfw.analysis.agreement.check_study`)."""
+        if self.spec.compare_with is not None:
+            from .analysis.paper_comparison import check_study
+
+            check_study(self, problems)
+        if self.spec.agree_with is not None:
+            from .analysis.agreement import check_study as check_agreement
+
+            check_agreement(self, problems)
 
     # ---- use ---------------------------------------------------------------------------------
     @property

@@ -8,7 +8,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from .models.stepsize import DEFAULT_TOLERANCE
+from ..models.stepsize import DEFAULT_TOLERANCE
 
 Quantity = str | float | int
 
@@ -86,35 +86,31 @@ class ParameterOverride(_Strict):
     max: Quantity | None = None
 
 
-class ScorerSpec(BaseModel):
-    """A scorer and its options; ``label`` names the result (default: the scorer name)."""
+class _PluginSpec(BaseModel):
+    """A plugin named in a stage with its options (every other key; checked against the
+    plugin's declared options, :mod:`sensfw.options`); ``label`` names it in the results
+    (default: its name)."""
 
     model_config = ConfigDict(extra="allow")
     name: str
     label: str | None = None
+
+    def options(self) -> dict[str, Any]:
+        return dict(self.model_extra or {})
+
+    @property
+    def key(self) -> str:
+        return self.label or self.name
+
+
+class ScorerSpec(_PluginSpec):
+    """A scorer, its options and the channel it scores (default: the study's output)."""
+
     channel: str | None = None
 
-    def options(self) -> dict[str, Any]:
-        return dict(self.model_extra or {})
 
-    @property
-    def key(self) -> str:
-        return self.label or self.name
-
-
-class SurrogateSpec(BaseModel):
-    """A surrogate and its options; ``label`` names it in the results (default: its name)."""
-
-    model_config = ConfigDict(extra="allow")
-    name: str
-    label: str | None = None
-
-    def options(self) -> dict[str, Any]:
-        return dict(self.model_extra or {})
-
-    @property
-    def key(self) -> str:
-        return self.label or self.name
+class SurrogateSpec(_PluginSpec):
+    """A surrogate and its options."""
 
 
 class SelectSpec(_Strict):
@@ -158,6 +154,29 @@ class CalibrationSection(_Strict):
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
 
 
+class CompareSection(_Strict):
+    """A published study to set a stage's Eq. 18 results beside (the report's comparison
+    section): ``reference`` names a data file of :mod:`sensfw.analysis.paper_comparison`,
+    ``factors`` maps the reference's factors to the stage's design variables and
+    ``responses`` its responses to the stage's scorer labels."""
+
+    reference: str
+    stage: str
+    factors: dict[str, str] = Field(default_factory=dict)
+    responses: dict[str, str] = Field(default_factory=dict)
+
+
+class AgreeSection(_Strict):
+    """A finished run of a fuller pipeline on the same model (its output folder: absolute,
+    relative to the study file, or else to the working folder) whose conclusions the report
+    checks this study against (:mod:`sensfw.analysis.agreement`): the selection of stage
+    ``screen`` and the second stage ``stage``, named alike in both studies."""
+
+    results: str
+    screen: str = "screen"
+    stage: str = "doe"
+
+
 class StudyFile(_Strict):
     study: StudyInfo
     model: ModelSection = Field(default_factory=ModelSection)
@@ -168,3 +187,5 @@ class StudyFile(_Strict):
     groups: dict[str, list[str]] | None = None  # None: the model's default grouping
     stages: list[StageSpec] = Field(min_length=1)
     calibration: CalibrationSection | None = None
+    compare_with: CompareSection | None = None
+    agree_with: AgreeSection | None = None

@@ -29,12 +29,12 @@ import math
 from collections.abc import Mapping
 
 from ...errors import ParameterError
-from ..contact import Friction, PenaltyLaw, stiffness_si
+from ...params import MM
+from ..contact import FrictionLaw, PenaltyLaw, stiffness_si
 from ..places import Place
 from ..planar import Body, Link, Mechanism, plus
 from .table1 import Geometry
 
-MM = 1e-3  # m per mm
 HOUSING = "H"  # ground
 
 
@@ -91,7 +91,7 @@ def laws(p: Mapping[str, float], g: Geometry) -> dict[str, PenaltyLaw]:
             f"slide_v_friction ({p['slide_v_friction']:g} mm/s): Eq. 3 blends the static "
             "into the dynamic coefficient between the two (group them to move together)")
     slide = (p["slide_stiffness"], p["slide_exponent"], p["slide_damping"])
-    friction = Friction(mu_s, mu_d, v_s, v_t)
+    friction = FrictionLaw(mu_s, mu_d, v_s, v_t)
     return {
         "bearing_l1": law(g.bearing_radial_k, g.bearing_radial_b, p["l1_damping"]),
         "bearing_l3": law(g.bearing_radial_k, g.bearing_radial_b, p["l3_damping"]),

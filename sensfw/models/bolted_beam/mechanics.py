@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import replace
 
+from ...params import MM
 from ..contact import PenaltyLaw
 from ..joint import LinearJoint
 from ..places import Place
@@ -29,7 +30,6 @@ from .fe import Beam
 from .parameters import Geometry
 
 GROUND = "ground"
-MM = 1e-3
 TRANSVERSE, AXIAL = (0.0, 1.0), (1.0, 0.0)
 
 

@@ -1,0 +1,293 @@
+"""Design strategies against the conclusions of the paper's pipeline on the shipped model
+(issue 28): how many simulations does each need to conclude what the OAT screen + 3^4 full
+factorial (120 runs) concludes?
+
+    python bench/strategies.py [--out out/strategies] [--reuse out/paper] [--workers 2]
+                               [--budget 45]
+
+Every run goes through one run store (``OUT/runs``, also reading ``REUSE/runs``, e.g. the
+output folder of ``sensfw run studies/paper.toml``), so a run that several strategies share is
+simulated once: the benchmark costs the union of the designs, and each strategy's count is
+the number of distinct runs it needs (its union), the nominal reference run included where
+its scores need it.
+
+The reference: ``studies/paper.toml`` run as the paper's pipeline, i.e. the OAT screen of the
+19 design variables (39 runs with the nominal) scored by the FRF scalar, the top 4 above 10 %
+normalised sensitivity, then the 3-level full factorial (81 runs) on them scored by P1, P2
+and THD, each fitted by Eq. 18 (product interactions, 15 terms).
+
+A strategy reaches the same conclusions when it keeps the same top 4 in its screen, and its
+second stage predicts the full factorial's other runs within the full factorial's own
+leave-one-out RMSE and flags the same significant Eq. 18 terms, where "the same significant
+terms" means: every term the full factorial flags with p < 0.001 is flagged at p < 0.05, and
+none that it finds with p > 0.5 (coded variables). Between the two the full factorial's own
+decision is not reproducible: a term at p = 0.001 keeps p < 0.05 in an independent replicate
+with probability 0.91, one at p = 0.5 turns significant with probability 0.10 (the argument,
+and the choice of the prediction surrogate, are in sensfw/analysis/agreement.py, which the
+study reports use too). The strict form, the same set at p < 0.05, is printed too.
+
+Screens: the paper's OAT; Morris (r = 2 trajectories on the 19 variables, the paper's pairs
+moved together); Morris with groups (r = 2 on Table 1's seven components, then OAT on the
+members of the components whose mu* exceeds 10 % of the largest); a definitive screening
+design on the 19 variables. Second stages, on the reference's top-4 box (all of their runs
+lie on the full factorial's 3-level grid): Box-Behnken, face-centred central composite, the
+three complementary 3^(4-1) generalized subset fractions, and uncertainty sampling (a
+Gaussian-process sequence started from the 9-run definitive screening design of the 4
+variables, adding the grid point where the surrogates are least certain, one at a time, up
+to ``--budget`` runs; it reaches the conclusions at the first count from which every
+criterion holds at every later count).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+# bench/signal.py would shadow the standard library's signal module (imported by the process
+# pool's dependencies) when this script's folder is first on the path
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).parent]
+
+import argparse  # noqa: E402
+import re  # noqa: E402
+import time  # noqa: E402
+from collections import defaultdict  # noqa: E402
+
+import pandas as pd  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+SCREEN_THRESHOLD, TOP = 0.10, 4
+
+
+# ---- the reference ---------------------------------------------------------------------------
+def conclusions(space, ev):
+    """The full factorial's conclusions (:class:`sensfw.analysis.agreement.Conclusions`)."""
+    from sensfw.analysis.agreement import Conclusions
+
+    return Conclusions(names=space.names, bounds=[(v.low, v.high) for v in space.variables],
+                       table=ev.table, scores=ev.scores)
+
+
+class Bench:
+    """The study, the runner, the scorers and the reference conclusions."""
+
+    def __init__(self, runner):
+        from sensfw.evaluate import make_scorers, reference_spec
+        from sensfw.study import Study
+
+        self.study = Study.load(ROOT / "studies" / "paper.toml")
+        self.runner = runner
+        screen, doe = self.study.stages
+        self.screen_stage, self.doe_stage = screen, doe
+        self.frf = make_scorers(self.study, screen)
+        self.orders = make_scorers(self.study, doe)
+        self.ref_spec = reference_spec(self.study)
+        self.ref_key = self.ref_spec.key()
+        self.all_space = self.study.space(screen, None)
+
+    def screen(self, space, design, label):
+        """(keys incl. the reference run, ScreeningResult) of ``design`` on ``space``."""
+        from sensfw.evaluate import evaluate
+
+        ev = evaluate(self.study, space, design, self.runner, self.frf, self.ref_spec,
+                      label=label)
+        res = ev.design.analyze(space, ev.table, ev.scores[self.screen_stage.scorers[0].key])
+        return [*ev.keys, self.ref_key], res
+
+    def second(self, space, design, label):
+        from sensfw.evaluate import evaluate
+
+        return evaluate(self.study, space, design, self.runner, self.orders, label=label)
+
+
+def select(result) -> list[str]:
+    return result.select(threshold=SCREEN_THRESHOLD, max_variables=TOP)
+
+
+# ---- strategies ------------------------------------------------------------------------------
+def screens(bench: Bench) -> dict[str, dict]:
+    """Every screen: runs (distinct keys), selection, agreement with the reference's top 4."""
+    from sensfw.designs import make_design
+
+    space = bench.all_space
+    out = {}
+    keys, res = bench.screen(space, make_design("oat"), "screen: OAT")
+    out["OAT (paper)"] = {"keys": set(keys), "selected": select(res), "result": res}
+    keys, res = bench.screen(space, make_design("morris", trajectories=2), "screen: Morris")
+    out["Morris r=2"] = {"keys": set(keys), "selected": select(res), "result": res}
+    components = defaultdict(list)
+    for v in space.variables:
+        group = bench.study.parameters[v.members[0]].group
+        components[re.sub(r"\W+", "_", group.lower()).strip("_")].append(v.name)
+    gm = make_design("morris", trajectories=2, groups=dict(components))
+    keys_g, res_g = bench.screen(space, gm, "screen: Morris with groups")
+    kept = [g for g in res_g.ranking if res_g.importance[g] > SCREEN_THRESHOLD]
+    members = [v for g in kept for v in components[g]]
+    sub = bench.study.space(bench.screen_stage, members)
+    keys_o, res_o = bench.screen(sub, make_design("oat"), "screen: OAT within groups")
+    out["Morris with groups r=2, then OAT"] = {
+        "keys": set(keys_g) | set(keys_o), "selected": select(res_o), "result": res_o,
+        "detail": f"kept {', '.join(kept)} ({len(members)} variables)"}
+    dsd = make_design("definitive_screening")
+    keys, res = bench.screen(space, dsd, "screen: definitive screening")
+    out["definitive screening"] = {"keys": set(keys), "selected": select(res), "result": res}
+    return out
+
+
+def second_stages(bench: Bench, ref, budget: int) -> dict[str, dict]:
+    from sensfw.analysis.agreement import agreement
+    from sensfw.designs import make_design
+    from sensfw.designs.sequential import run_sequence
+
+    space = bench.study.space(bench.doe_stage, ref.names)
+    out = {}
+    plans = {"Box-Behnken": make_design("box_behnken", center=1),
+             "face-centred CCD": make_design("central_composite", face="ccf", center=[1, 0])}
+    for f in range(3):
+        plans[f"3^(4-1) subset, fraction {f}"] = make_design("subset", reduction=3, fraction=f)
+    for name, design in plans.items():
+        ev = bench.second(space, design, f"second stage: {name}")
+        out[name] = {"keys": set(ev.keys), **agreement(ref, ev.table, ev.scores)}
+    # uncertainty sampling on the full factorial's grid, from the 4-variable DSD
+    start = make_design("definitive_screening").generate(space)
+    grid = ref.table[space.names]
+    trail = []
+
+    def step(seq):
+        if len(seq.table) >= 16:  # Eq. 18 needs more runs than its 15 coefficients
+            trail.append((len(seq.table), set(seq.keys), agreement(ref, seq.table, seq.scores)))
+
+    run_sequence(bench.study, space, bench.runner, bench.orders, start, grid, budget,
+                 on_step=step)
+    reached = None
+    for i in range(len(trail)):
+        if all(a["reached"] for _, _, a in trail[i:]):
+            reached = i
+            break
+    pick = trail[reached] if reached is not None else trail[-1]
+    out["GP uncertainty sampling"] = {
+        "keys": pick[1], **pick[2],
+        "detail": (f"holds from {pick[0]} runs to the budget {trail[-1][0]}"
+                   if reached is not None else f"not reached by the budget {trail[-1][0]}"),
+        "trail": [(n, a) for n, _, a in trail]}
+    return out
+
+
+# ---- printing ---------------------------------------------------------------------------------
+SHORT = {"eq18": "eq18", "gaussian_process": "gp"}
+
+
+def _yes(b) -> str:
+    return "yes" if b else "no"
+
+
+def print_screens(out, top4, ref_keys):
+    print(f"\nScreens (reference top {TOP}: {', '.join(top4)})")
+    rows = []
+    for name, s in out.items():
+        rows.append({"strategy": name, "runs": len(s["keys"]),
+                     "selected": ", ".join(s["selected"]),
+                     "same top 4": _yes(set(s["selected"]) == set(top4)),
+                     "shared with the paper's screen": len(s["keys"] & ref_keys)})
+    print(pd.DataFrame(rows).set_index("strategy").to_string())
+    for name, s in out.items():
+        if "detail" in s:
+            print(f"  {name}: {s['detail']}")
+
+
+def print_second(out, ref):
+    print("\nSecond stages on the top-4 box (criteria 2 and 3; ratio = RMSE on the unrun "
+          "full-factorial points / the full factorial's LOO RMSE "
+          + ", ".join(f"{k} {v:.3g}" for k, v in ref.rmse_loo.items()) + ")")
+    rows = []
+    for name, s in out.items():
+        r = {"strategy": name, "runs": len(s["keys"])}
+        for label, a in s["scores"].items():
+            if "error" in a:
+                r[f"{label}"] = a["error"][:30]
+                continue
+            r[f"{label} ratio"] = f"{a['ratio']:.2f} ({SHORT[a['surrogate']]})"
+            r[f"{label} terms"] = ("same" if a["strict"] else "tol." if a["terms"] else
+                                   "no: " + ", ".join(["-" + t for t in a["missed"]]
+                                                      + ["+" + t for t in a["wrong"]]))
+        r["predicts"] = _yes(s["predicts"])
+        r["terms"] = _yes(s["terms"])
+        r["reached"] = _yes(s["reached"])
+        rows.append(r)
+    with pd.option_context("display.width", 250, "display.max_colwidth", 60):
+        print(pd.DataFrame(rows).set_index("strategy").to_string())
+    print("  terms: 'same' = the same set at p < 0.05; 'tol.' = every term with p < 0.001 in "
+          "the full factorial flagged and none with p > 0.5; 'no: -t' = t missed, '+t' = t "
+          "flagged wrongly")
+    for name, s in out.items():
+        if "detail" in s:
+            print(f"  {name}: {s['detail']}")
+        for n, a in s.get("trail", []):
+            print(f"    {n:3d} runs: predicts {_yes(a['predicts'])}, terms {_yes(a['terms'])}"
+                  "  (" + ", ".join(f"{k} {v['ratio']:.2f}" for k, v in a["scores"].items()
+                                   if "ratio" in v) + ")")
+
+
+def main() -> None:
+    from sensfw.analysis.agreement import MUST, MUST_NOT, agreement
+    from sensfw.designs import make_design
+    from sensfw.runs import Runner, RunStore
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "strategies")
+    ap.add_argument("--reuse", type=Path, action="append", default=[],
+                    help="output folder whose run store is read too (e.g. out/paper)")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--budget", type=int, default=45,
+                    help="runs of the uncertainty-sampling sequence at most")
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    store = RunStore(args.out / "runs", read_also=[r / "runs" for r in args.reuse])
+    with Runner(store, workers=args.workers) as runner:
+        bench = Bench(runner)
+        keys_oat, res_oat = bench.screen(bench.all_space, make_design("oat"), "paper: OAT")
+        top4 = select(res_oat)
+        space = bench.study.space(bench.doe_stage, top4)
+        ev = bench.second(space, make_design("full_factorial", levels=3), "paper: 3^4")
+        ref = conclusions(space, ev)
+        paper = {"keys": set(ev.keys), **agreement(ref, ev.table, ev.scores)}
+        sc = screens(bench)
+        st = {"full factorial 3^4 (paper)": paper, **second_stages(bench, ref, args.budget)}
+    counts = runner.counts
+    print(f"paper's pipeline: OAT screen {len(set(keys_oat))} runs -> "
+          f"{', '.join(top4)}; 3^4 full factorial {len(paper['keys'])} runs; "
+          f"{len(set(keys_oat) | paper['keys'])} in all")
+    for label in ref.scores.columns:
+        sig, must, must_not = ref.classes(label)
+        print(f"  {label}: significant (p < 0.05, coded) {', '.join(sorted(sig))}; "
+              f"must be flagged (p < {MUST}) {', '.join(sorted(must))}; "
+              f"{len(must_not)} terms with p > {MUST_NOT}")
+    print_screens(sc, top4, set(keys_oat))
+    print_second(st, ref)
+    rows = []
+    for sname, s in sc.items():
+        if set(s["selected"]) != set(top4):
+            continue
+        for tname, t in st.items():
+            if t["reached"]:
+                rows.append({"screen": sname, "second stage": tname,
+                             "runs": len(s["keys"] | t["keys"])})
+    print("\nPipelines reaching the paper's conclusions (union of their runs):")
+    if rows:
+        table = pd.DataFrame(rows).sort_values("runs", kind="stable")
+        print(table.to_string(index=False))
+        best = table.iloc[0]
+        print(f"fewest: {best['runs']} runs ({best['screen']} + {best['second stage']}); "
+              f"the paper's pipeline: {len(set(keys_oat) | paper['keys'])}; bar 60: "
+              f"{'met' if best['runs'] <= 60 else 'NOT met'}")
+    else:
+        print("  none")
+    every = set().union(*(s["keys"] for s in sc.values()), *(t["keys"] for t in st.values()))
+    summed = sum(len(s["keys"]) for s in sc.values()) + sum(len(t["keys"])
+                                                            for t in st.values())
+    print(f"\nbenchmark: {len(every)} distinct runs (the designs' sum: {summed}); this call "
+          f"simulated {counts.new}, read {counts.cached} from the store "
+          f"({time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,195 @@
+"""Checks of a study file before anything runs, as pure functions of the parsed file (and of
+what the study resolved from it: the model's parameters and sensors, the excitation).
+
+Every problem is returned at its dotted path
+(``stages[1].design_options.levelz: unknown option; known: levels``), all at once. Every
+design, scorer and surrogate the study names is built with its options through the one
+check of every plugin kind (:func:`plugin_problems`, :mod:`sensfw.options`); scorers are
+also checked against the study's excitation (an FRF band above Nyquist or outside the
+sweep), designs against the stage's design space where its variables are known before the
+run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+from ..errors import SensfwError, UnknownPluginError
+from ..options import Problem, build
+from ..params import DesignSpace, ParameterSet
+from .schema import ParameterOverride, StageSpec
+from .units import to_unit
+
+Problems = list[tuple[str, str]]
+#: a parameter's bound overrides: ``{name: {"min": ..., "nominal": ..., "max": ...}}``
+Bounds = dict[str, dict[str, float]]
+
+
+def bound_overrides(overrides: Mapping[str, ParameterOverride], declared: ParameterSet,
+                    prefix: str) -> tuple[Bounds, Problems]:
+    """The overrides of ``declared`` parameters in their units, and every problem at
+    ``prefix.<parameter>[.field]`` (an unknown parameter, a value that does not convert, a
+    min above the max, a nominal outside the bounds)."""
+    problems: Problems = []
+    changes: Bounds = {}
+    for name, ov in overrides.items():
+        if name not in declared:
+            problems.append((f"{prefix}.{name}", f"unknown parameter; the model has "
+                                                 f"{', '.join(declared)}"))
+            continue
+        p = declared[name]
+        vals = {}
+        for field_name in ("nominal", "min", "max"):
+            raw = getattr(ov, field_name)
+            if raw is None:
+                continue
+            try:
+                vals[field_name] = to_unit(raw, p.unit)
+            except ValueError as err:
+                problems.append((f"{prefix}.{name}.{field_name}", str(err)))
+        lo = vals.get("min", p.min)
+        hi = vals.get("max", p.max)
+        nom = vals.get("nominal", p.nominal)
+        if lo > hi:
+            problems.append((f"{prefix}.{name}.max",
+                             f"max {hi:g} {p.unit} is below min {lo:g} {p.unit}"))
+        elif not lo <= nom <= hi:
+            problems.append((f"{prefix}.{name}.nominal",
+                             f"nominal {nom:g} {p.unit} outside [{lo:g}, {hi:g}] {p.unit}"))
+        changes[name] = vals
+    return changes, problems
+
+
+def _at(where: str, problems: list[Problem]) -> Problems:
+    """Problems of a plugin's options at their dotted paths under ``where``."""
+    return [(f"{where}.{opt}" if opt else where, msg) for opt, msg in problems]
+
+
+def plugin_problems(registry, name: str, options: Mapping[str, Any], where: str,
+                    name_at: str | None = None) -> tuple[Any, Problems]:
+    """``(plugin or None, problems)``: the plugin registered as ``name`` built with
+    ``options`` (:func:`sensfw.options.build`, the one check of every plugin kind), every
+    problem at its path under ``where`` (an unknown name at ``name_at``, default
+    ``where``)."""
+    try:
+        cls = registry.get(name)
+    except UnknownPluginError as err:
+        return None, [(name_at or where, str(err))]
+    plugin, found = build(cls, options)
+    return plugin, _at(where, found)
+
+
+def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace] | None,
+            variables: Sequence[str]) -> Problems:
+    """The stage's design and its options; its run count where the space is known (the
+    stage's variables are not taken from an earlier stage)."""
+    from ..plugins import designs
+
+    design, found = plugin_problems(designs, st.design, st.design_options,
+                                    f"{where}.design_options", name_at=f"{where}.design")
+    if found or space is None:
+        return found
+    if isinstance(st.variables, str) and st.variables.startswith("selected:"):
+        return []
+    names = list(variables) if st.variables == "all" else list(st.variables)
+    if not set(names) <= set(variables):
+        return []  # unknown variables are reported at stages[i].variables
+    try:
+        design.n_runs(space(names))
+    except SensfwError as err:
+        return [(f"{where}.design", str(err))]
+    return []
+
+
+def _scorers(st: StageSpec, where: str, excitation, sensors: Sequence[str] | None
+             ) -> tuple[Problems, list[str]]:
+    from ..plugins import scorers
+
+    problems: Problems = []
+    labels = []
+    for j, sc in enumerate(st.scorers):
+        at = f"{where}.scorers[{j}]"
+        scorer, found = plugin_problems(scorers, sc.name, sc.options(), at, name_at=f"{at}.name")
+        problems += found
+        if scorer is not None and excitation is not None:
+            try:
+                scorer.check_excitation(excitation)
+            except SensfwError as err:
+                opt = getattr(err, "option", None)
+                problems.append((f"{at}.{opt}" if opt else at, str(err)))
+        if sc.channel is not None and sensors is not None and \
+                sc.channel not in (*sensors, "force"):
+            problems.append((f"{at}.channel", f"unknown channel {sc.channel!r}; the model "
+                                              f"has {', '.join(sensors)}"))
+        if sc.key in labels:
+            problems.append((f"{at}.label", f"duplicate scorer label {sc.key!r}"))
+        labels.append(sc.key)
+    return problems, labels
+
+
+def _surrogates(st: StageSpec, where: str) -> Problems:
+    from ..plugins import surrogates
+
+    problems: Problems = []
+    seen = []
+    for j, sur in enumerate(st.surrogates):
+        at = f"{where}.surrogates[{j}]"
+        problems += plugin_problems(surrogates, sur.name, sur.options(), at)[1]
+        if sur.key in seen:
+            problems.append((f"{at}.label", f"duplicate surrogate label {sur.key!r}"))
+        seen.append(sur.key)
+    return problems
+
+
+def _variables(st: StageSpec, i: int, stages: Sequence[StageSpec],
+               variables: Sequence[str]) -> Problems:
+    where = f"stages[{i}].variables"
+    names = [s.name for s in stages]
+    if isinstance(st.variables, str) and st.variables.startswith("selected:"):
+        ref = st.variables.split(":", 1)[1]
+        if ref not in names[:i]:
+            return [(where, f"no earlier stage named {ref!r}")]
+        if stages[names.index(ref)].select is None:
+            return [(where, f"stage {ref!r} has no [select] to take variables from")]
+    elif isinstance(st.variables, list) and variables:
+        return [(where, f"unknown design variable {v!r}; known: "
+                        f"{', '.join(sorted(variables))}")
+                for v in st.variables if v not in variables]
+    return []
+
+
+def check_stages(stages: Sequence[StageSpec], *, parameters: ParameterSet | None,
+                 groups: Mapping[str, Sequence[str]], excitation=None,
+                 sensors: Sequence[str] | None = None) -> tuple[Problems, dict[str, Bounds]]:
+    """Every problem of the study's ``stages`` and each stage's bound overrides (by stage
+    name), given what the study resolved: its ``parameters`` (None when they did not
+    resolve), its ``groups`` of parameters into design variables, its ``excitation`` and
+    the model's ``sensors`` (None: no model)."""
+    problems: Problems = []
+    stage_bounds: dict[str, Bounds] = {}
+    names = [s.name for s in stages]
+    variables = [] if parameters is None else \
+        DesignSpace.from_parameters(parameters, groups).names
+    for i, st in enumerate(stages):
+        where = f"stages[{i}]"
+        if names.count(st.name) > 1:
+            problems.append((f"{where}.name", f"duplicate stage name {st.name!r}"))
+        space = None
+        if parameters is not None:
+            bounds, found = bound_overrides(st.bounds, parameters, f"{where}.bounds")
+            stage_bounds[st.name] = bounds
+            problems += found
+            if not found:  # the stage's space is known (its variables permitting)
+                def space(select, bounds=bounds):
+                    return DesignSpace.from_parameters(parameters, groups, select=select,
+                                                       bounds=bounds)
+        found, labels = _scorers(st, where, excitation, sensors)
+        problems += found
+        problems += _surrogates(st, where)
+        if st.select is not None and st.select.by is not None and st.select.by not in labels:
+            problems.append((f"{where}.select.by", f"no scorer labelled {st.select.by!r} "
+                                                   f"in this stage ({', '.join(labels)})"))
+        problems += _variables(st, i, stages, variables)
+        problems += _design(st, where, space, variables)
+    return problems, stage_bounds

@@ -1,0 +1,37 @@
+"""Values with units in study files: ``"7.05e5 N/mm"``, ``"5 kHz"`` (pint), or bare numbers
+meaning the unit the model declares."""
+
+from __future__ import annotations
+
+import functools
+
+from .schema import Quantity
+
+
+@functools.cache
+def units():
+    """The pint unit registry (built once: it takes a moment)."""
+    import pint
+
+    return pint.UnitRegistry()
+
+
+def to_unit(value: Quantity, unit: str) -> float:
+    """``value`` ("7.05e5 N/mm", or a bare number meaning ``unit``) as a float in ``unit``."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number or a quantity string, got {value!r}")
+    if isinstance(value, (int, float)):
+        return float(value)
+    import pint
+
+    try:
+        q = units().Quantity(value.strip())
+        if isinstance(q, (int, float)):
+            return float(q)
+        return float(q.to(unit or "dimensionless").magnitude)
+    except pint.DimensionalityError:
+        raise ValueError(f"cannot convert {value!r} to {unit or 'a plain number'}") from None
+    except (pint.UndefinedUnitError, pint.errors.DefinitionSyntaxError, ValueError,
+            AttributeError, TypeError, AssertionError) as err:
+        raise ValueError(f"cannot read {value!r} as a quantity in {unit or '1'}: {err}") \
+            from None
