@@ -112,7 +112,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     log(f"H0: calibrating {', '.join(names)} ({source}), {budget} simulations in all")
     h0 = Hypothesis(None, "", base)
     h0.fit = calibrate_hypothesis(res, h0, int(0.3 * budget) // n_levels, log=log, **opts)
-    scatter = widen_for_roughness(res, h0.fit, log)
+    rough = widen_for_roughness(res, h0.fit, log)
     (h0_all,) = res.comparisons(None, [h0.fit.values], "H0")
     h0_cmp = res.output_comparisons(h0_all)
     log(f"H0: chi2 {h0.fit.chi2:.4g} for {n} entries")
@@ -165,6 +165,21 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             calibrated.append(h)
         if calibrated:
             _refresh_h0(res, h0, calibrated, opts, log)
+            for h in calibrated:  # at its neutral values a candidate is H0
+                if h.fit.chi2 > h0.fit.chi2:
+                    h.fit.best = Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w)
+                    h.notes.append("H0 recalibrated ended better: the effect at its "
+                                   "neutral values")
+            lead = min(calibrated, key=lambda h: h.bic(n))
+            if lead.bic(n) < h0.bic(n) - min_delta_bic:
+                # the model's scatter where the leader ended: what it gained within that
+                # scatter is no evidence (a stick-slip response can fit one noisy record
+                # by chance at one point and nowhere next to it)
+                rough = widen_for_roughness(
+                    res, lead.fit, log, lead.effects, already=rough,
+                    fits=[h0.fit, *(h.fit for h in calibrated if h is not lead)])
+                log(f"  {lead.name}: chi2 {lead.fit.chi2:.4g}, H0 {h0.fit.chi2:.4g} with "
+                    "the leader's scatter")
     for h in hyps:  # not calibrated: at its neutral values the candidate is H0
         if h.fit is None or h not in calibrated:
             h.fit = Fit(h.coords, Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w), None)
@@ -189,7 +204,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
         criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3, "budget": budget,
                   "records": res.records(), "kind_weights": res.kind_weights,
                   "refine": local, "model_db": discrepancy.MODEL_DB,
-                  "thd_db": discrepancy.THD_DB, "model_scatter_db": scatter},
+                  "thd_db": discrepancy.THD_DB,
+                  "model_scatter_db": float(np.median(rough)) if len(rough) else 0.0},
         residuals=res)
 
 

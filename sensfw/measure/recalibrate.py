@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from ..errors import SensfwError
 from ..runs import Runner
 from ..study import Study
@@ -45,7 +47,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     h0 = Hypothesis(None, "", base)
     fit = calibrate_hypothesis(res, h0, budget // n_levels, q=workers_of(runner),
                                local=local, log=log)
-    scatter = widen_for_roughness(res, fit, log)
+    rough = widen_for_roughness(res, fit, log)
     (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
     trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":
                    res.rms_db_per_level(c), "levels": [m.level for m in measurements],
@@ -59,7 +61,8 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
               "surrogate": fit.info.get("surrogate"), "chi2": fit.chi2,
               "n_entries": res.entries.size(),
               "fits_noise": discrepancy.fits(fit.best.w, len(base)),
-              "model_scatter_db": scatter, "trajectory": trajectory,
+              "model_scatter_db": float(np.median(rough)) if len(rough) else 0.0,
+              "trajectory": trajectory,
               "n_simulations": res.n_simulations, "budget": budget,
               "records": res.records(), "kind_weights": res.kind_weights,
               "comparison": {"nominal model": [c.to_dict() for c in

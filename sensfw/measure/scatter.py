@@ -11,7 +11,7 @@ being credited with fitting the irregular part.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -45,23 +45,36 @@ def roughness(res: Residuals, fit: Fit, effects=(), delta: float = 0.01) -> np.n
     return np.sqrt(np.mean(np.square(second), axis=0) / 1.5)
 
 
-def widen_for_roughness(res: Residuals, fit: Fit, log: Log = lambda s: None,
-                        effects=()) -> float:
-    """Add the model's scatter around ``fit``'s optimum (:func:`roughness`) to every entry's
-    standard error; every trial kept so far and ``fit``'s Jacobian are reweighted. Returns
-    the median scatter (dB)."""
+def widen(res: Residuals, extra_db: np.ndarray, fits: Sequence[Fit] = ()) -> None:
+    """Add ``extra_db`` (one value per entry) to every entry's standard error in
+    quadrature; every trial kept by ``res`` and every trial, best point and Jacobian of
+    ``fits`` is reweighted."""
     sigma = np.array([x for part in res.entries.sigma for x in part])
-    rough = roughness(res, fit, effects)
-    res.add_scatter(rough)
+    res.add_scatter(extra_db)
     scale = sigma / np.array([x for part in res.entries.sigma for x in part])
     seen = set()
-    for t in [fit.best, *fit.trials]:  # the fit's own copies of the trials
-        if id(t) not in seen and t.w is not None:
-            t.w = t.w * scale
-            seen.add(id(t))
-    if fit.jacobian is not None:
-        fit.jacobian = fit.jacobian * scale[:, None]
-    med = float(np.median(rough)) if len(rough) else 0.0
-    log(f"model scatter around the calibrated point: median {med:.2f} dB, largest "
+    for fit in fits:
+        for t in [fit.best, *fit.trials]:  # the fits' own copies of the trials
+            if id(t) not in seen and t.w is not None:
+                t.w = t.w * scale
+                seen.add(id(t))
+        if fit.jacobian is not None and id(fit.jacobian) not in seen:
+            fit.jacobian = fit.jacobian * scale[:, None]
+            seen.add(id(fit.jacobian))
+
+
+def widen_for_roughness(res: Residuals, fit: Fit, log: Log = lambda s: None,
+                        effects=(), fits: Sequence[Fit] = (),
+                        already: np.ndarray | None = None) -> np.ndarray:
+    """Add the model's scatter around ``fit``'s optimum (:func:`roughness`, of the model
+    with ``effects``) to every entry's standard error, beyond the scatter ``already``
+    added (per entry, dB); ``fit`` and ``fits`` are reweighted with every trial kept.
+    Returns the scatter per entry now in the errors."""
+    rough = roughness(res, fit, effects)
+    before = np.zeros_like(rough) if already is None else np.asarray(already, float)
+    total = np.maximum(rough, before)
+    widen(res, np.sqrt(total**2 - before**2), [fit, *fits])
+    log(f"model scatter around {'the calibrated point' if not effects else 'its optimum'}:"
+        f" median {float(np.median(rough)) if len(rough) else 0.0:.2f} dB, largest "
         f"{float(np.max(rough, initial=0.0)):.2f} dB")
-    return med
+    return total

@@ -266,9 +266,9 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
 def _write_json(path: Path, data) -> None:
     import json
 
-    from ..pipeline import _jsonable
+    from ..results import jsonable
 
-    path.write_text(json.dumps(_jsonable(data), indent=1))
+    path.write_text(json.dumps(jsonable(data), indent=1))
 
 
 def write_diagnosis(out_dir, study, result, wall_s: float | None = None) -> dict:
