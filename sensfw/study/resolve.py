@@ -265,11 +265,11 @@ class Study:
         scorers (:func:`sensfw.analysis.paper_comparison.check_study`); ``[agree_with]``:
         its stages exist here (:func:`sensfw.analysis.agreement.check_study`)."""
         if self.spec.compare_with is not None:
-            from .analysis.paper_comparison import check_study
+            from ..analysis.paper_comparison import check_study
 
             check_study(self, problems)
         if self.spec.agree_with is not None:
-            from .analysis.agreement import check_study as check_agreement
+            from ..analysis.agreement import check_study as check_agreement
 
             check_agreement(self, problems)
 
