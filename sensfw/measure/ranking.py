@@ -5,7 +5,8 @@
   "parameters only" reaches at its own optimum (a heavier shaft against a stiffer bearing:
   both fits tie, and BIC then prefers the hypothesis with fewer parameters).
 * **Held-out levels** (two or more levels): each level left out in turn, the calibration
-  moved by one Gauss-Newton step to fit the others, the left-out level simulated.
+  moved by one Gauss-Newton step (at most ``MAX_STEP``) to fit the others, the left-out
+  level simulated.
 * **The verdict**: "parameters" when H0 explains the measurement to its noise (chi-square
   test); otherwise the candidate of lowest BIC that beats H0 by ``min_delta_bic`` and (with
   several levels) predicts the held-out levels better; else "none". Candidates within
@@ -28,6 +29,10 @@ Log = Callable[[str], None]
 
 #: BIC difference under which two hypotheses are named together
 TIE_BIC = 2.0
+#: largest move (coded, max-norm) of a held-out refit's Gauss-Newton step: a parameter the
+#: other levels do not see (a stop's gap below the level that crosses it) would otherwise
+#: be thrown across its range by a column of the Jacobian that is all noise
+MAX_STEP = 0.1
 
 
 def heldout(res: Residuals, h: Hypothesis) -> float | None:
@@ -45,6 +50,9 @@ def heldout(res: Residuals, h: Hypothesis) -> float | None:
             A = Jk.T @ Jk
             step = -np.linalg.solve(A + 1e-3 * np.diag(np.maximum(np.diag(A), 1e-12)),
                                     Jk.T @ wk)
+            big = float(np.max(np.abs(step), initial=0.0))
+            if big > MAX_STEP:  # the Jacobian is local: no further than where it holds
+                step *= MAX_STEP / big
             values = {**fit.values, **h.coords.decode(np.clip(z + step, -1, 1))}
         (wl,) = res.evaluate(h.effects, [values], f"held-out level {lev + 1} {h.name}",
                              levels=[lev])

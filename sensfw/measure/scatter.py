@@ -5,8 +5,8 @@ fraction of a per cent can move band levels by decibels (measured on the quick s
 the friction velocity 0.65 mm/s), far below any calibration's resolution. The second
 differences ``(r(z + delta e_i) + r(z - delta e_i)) / 2 - r(z)`` along each coded axis
 cancel the smooth trend; for an irregular part of variance ``rho^2`` they have variance
-``1.5 rho^2``. Widening every entry's standard error by ``rho`` keeps any hypothesis from
-being credited with fitting the irregular part.
+``1.5 rho^2``; per entry the roughest axis counts. Widening every entry's standard error
+by ``rho`` keeps any hypothesis from being credited with fitting the irregular part.
 """
 
 from __future__ import annotations
@@ -42,7 +42,10 @@ def roughness(res: Residuals, fit: Fit, effects=(), delta: float = 0.01) -> np.n
             second.append((a * dB + b * dB) / 2 - r0)
     if not second:
         return np.zeros(len(sigma))
-    return np.sqrt(np.mean(np.square(second), axis=0) / 1.5)
+    # the roughest axis per entry, not the mean over axes: stick-slip makes the response
+    # irregular along the parameters that move its resonances (a stiffness) while it stays
+    # smooth along others (a damping), and a mean would dilute the first by the second
+    return np.sqrt(np.max(np.square(second), axis=0) / 1.5)
 
 
 def widen(res: Residuals, extra_db: np.ndarray, fits: Sequence[Fit] = ()) -> None:
