@@ -15,7 +15,6 @@ from .common import (
     Scheduler,
     ShowProgress,
     Workers,
-    _json,
     _running,
     _user_errors,
     app,
@@ -138,7 +137,7 @@ def compare(
     from ..measure.compare import compare_measurements
     from ..measure.lines import jump_text
     from ..measure.prepared import load_measurements
-    from ..report.measure import write_compare_report
+    from ..report.measure import write_comparison
     from ..study import Study
 
     study = Study.load(study_file)
@@ -150,8 +149,7 @@ def compare(
                 say(f"notice: {m.file}: {note}", style="yellow")
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_measurements(study, meas, runner, error_band=band)
-    _json(out_dir / "compare.json", result.to_dict())
-    write_compare_report(study, result, out_dir / "report.html")
+    write_comparison(out_dir, study, result)
     lo, hi = result.error_band
     for c in result.levels:
         thd = "" if c.thd_model is None else \
@@ -163,6 +161,15 @@ def compare(
             f" (the measurement's noise alone: {c.error_noise_db:.2f} dB)"
         out.print(f"{c.level_text}: FRF error {c.error_db:.2f} dB over {lo:g}-{hi:g} Hz"
                   f"{noise}{res}{thd}")
+    for b in result.bands:
+        if b.resonance_low is None:
+            continue
+        where = ("inside" if b.contains_resonance else "OUTSIDE") if \
+            b.contains_resonance is not None else "no measured resonance"
+        out.print(f"  prediction band {b.file}: resonance {b.resonance_low:.2f}-"
+                  f"{b.resonance_high:.2f} Hz ({where}; {b.width_db_at_resonance or 0:.2f} "
+                  f"dB wide at the resonance)"
+                  + (f"; extrapolation: {b.extrapolation}" if b.extrapolation else ""))
     for j in result.jumps:
         out.print("  " + jump_text(j))
     if result.amplitude:

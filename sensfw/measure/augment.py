@@ -14,7 +14,7 @@ from ..evaluate import model_with_effects
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
-from ..studyfile import add_effect, set_calibration
+from ..study.edit import add_effect, set_calibration, set_calibration_result
 from .calibration import Coordinates
 from .diagnose import _around, calibrate_hypothesis, workers_of
 from .hypotheses import Hypothesis, calibration_variables, neutral_values
@@ -110,6 +110,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
               "base_parameters": space.to_parameters(
                   {k: v for k, v in h.fit.values.items() if k in names}),
               "calibration": h.fit.summary(), "trades": h.fit.trades(),
+              "uncertainty": h.fit.uncertainty(res.records()),
               "surrogate": h.fit.info.get("surrogate"), "chi2": h.fit.chi2,
               "notes": h.notes, "trajectory": trajectory,
               "n_simulations": res.n_simulations, "budget": budget,
@@ -150,6 +151,8 @@ def augmented_study(text: str, study: Study, result: Mapping, measurements) -> s
         text = set_calibration(text, [*result["variables"],
                                       *(k for k in result["params"]
                                         if k not in result["variables"])])
+    if result.get("uncertainty") is not None:
+        text = set_calibration_result(text, result["uncertainty"])
     return text
 
 

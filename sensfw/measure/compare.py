@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..evaluate import simulate, variant_spec
 from ..models.base import Signals
 from ..signal.stepped import steps_of
 from .bands import (
@@ -41,6 +42,7 @@ from .distortion import (
 )
 from .lines import LONGER, compare_lines, jump, longer_drive
 from .measurement import FRFRecord
+from .prediction import bands, calibration_result, ellipsoid_points
 from .resonance import MIN_FIT_R2, fit_resonances, match_resonances, resonances
 from .signatures import amplitude_dependence
 
@@ -198,4 +200,32 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
         one = [replace(c, level=c.level_rms) for c in one]
     return Comparison(study=study.name, output=study.output, levels=levels, pairs=pairs,
                       amplitude=amplitude_dependence(one), notes=notes,
-                      error_band=error_band or band, jumps=jumps)
+                      error_band=error_band or band, jumps=jumps,
+                      bands=prediction_bands(study, measurements, runner, levels, effects,
+                                             error_band or band))
+
+
+def prediction_bands(study, measurements, runner, levels, effects=(),
+                     error_band: tuple[float, float] | None = None) -> list:
+    """The prediction band of each record (:mod:`sensfw.measure.prediction`) when the study
+    holds the calibration it was written from; ``levels`` are the records' comparisons
+    with the calibrated model."""
+    cal = calibration_result(study)
+    if cal is None:
+        return []
+    space = study.calibration_space(cal.coords.names)
+    points = [space.to_parameters(p) for p in
+              ellipsoid_points(cal.coords, cal.z, cal.covariance)]
+    specs = [variant_spec(study, p, m.drive, effects) for p in points for m in measurements]
+    sims, _ = simulate(runner, specs, "prediction band")
+    n = len(measurements)
+    samples = []
+    for j in range(len(points)):
+        row = []
+        for i, m in enumerate(measurements):
+            sig = sims[j * n + i]
+            row.append(None if sig is None else compare_level(
+                m.signals, sig, study.output, levels[i].band, m.level, m.file,
+                error_band=error_band))
+        samples.append(row)
+    return bands(levels, samples, cal.records, [m.kind for m in measurements])

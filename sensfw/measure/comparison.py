@@ -229,10 +229,14 @@ class Comparison:
     notes: list[str]
     error_band: tuple[float, float] | None = None
     jumps: list[dict] = field(default_factory=list)
+    #: per record, the prediction band of a calibrated study
+    #: (:class:`sensfw.measure.prediction.Band`); empty without ``[calibration.result]``
+    bands: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {"study": self.study, "output": self.output,
                 "error_definition": ERROR_DEFINITION,
                 "error_band_hz": list(self.error_band) if self.error_band else None,
                 "levels": [c.to_dict() for c in self.levels], "jumps": self.jumps,
-                "amplitude_dependence": self.amplitude, "notes": self.notes}
+                "amplitude_dependence": self.amplitude, "notes": self.notes,
+                "prediction_bands": [b.to_dict() for b in self.bands]}

@@ -120,6 +120,17 @@ class Measurement:
     drive: Any = None
 
     @property
+    def kind(self) -> str:
+        """What kind of record this is: ``"log_chirp"``, ``"linear_sweep"``,
+        ``"stepped_sine"``, ``"random"`` (time data, from the estimated excitation; before
+        :func:`~sensfw.measure.checks.prepare` every time record is ``"random"``) or
+        ``"frf"`` (FRFs alone)."""
+        if isinstance(self.signals, FRFRecord):
+            return "frf"
+        kind = getattr(self.sweep, "kind", None)
+        return kind if kind in ("log_chirp", "linear_sweep", "stepped_sine") else "random"
+
+    @property
     def frf(self) -> FRFRecord | None:
         """The FRFs of an FRF-only measurement (None for time data)."""
         return self.signals if isinstance(self.signals, FRFRecord) else None

@@ -26,7 +26,31 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-from .calibration import Coordinates
+from .calibration import Axis, Coordinates
+
+
+@dataclass
+class CalibrationResult:
+    """A calibrated study's ``[calibration.result]`` with its axes rebuilt."""
+
+    coords: Coordinates
+    z: np.ndarray
+    covariance: np.ndarray
+    records: list[dict]
+
+
+def calibration_result(study) -> CalibrationResult | None:
+    """The calibration a study was written from (``[calibration.result]``: the axes with
+    the study's bounds and the stored coding), or None."""
+    cal = study.spec.calibration
+    if cal is None or cal.result is None:
+        return None
+    r = cal.result
+    space = study.calibration_space(list(r.parameters))
+    axes = [Axis(v.name, float(v.low), float(v.high), float(v.nominal), v.unit, scale)
+            for v, scale in zip(space.variables, r.scales, strict=True)]
+    return CalibrationResult(Coordinates(axes), np.asarray(r.coded, float),
+                             np.asarray(r.covariance, float), [dict(x) for x in r.records])
 
 
 def ellipsoid_points(coords: Coordinates, z: np.ndarray, cov: np.ndarray,

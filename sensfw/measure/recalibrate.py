@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import SensfwError
 from ..runs import Runner
 from ..study import Study
-from ..studyfile import set_calibration, set_nominals
+from ..study.edit import set_calibration, set_calibration_result, set_nominals
 from . import discrepancy
 from .augment import _source_text
 from .calibration import Coordinates
@@ -58,6 +58,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     result = {"variables": names, "variables_from": source, "channels": res.channels,
               "params": fit.values, "base_parameters": space.to_parameters(fit.values),
               "calibration": fit.summary(), "trades": fit.trades(),
+              "uncertainty": fit.uncertainty(res.records()),
               "surrogate": fit.info.get("surrogate"), "chi2": fit.chi2,
               "n_entries": res.entries.size(),
               "fits_noise": discrepancy.fits(fit.best.w, len(base)),
@@ -77,5 +78,8 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
                   if v != study.parameters[k].nominal}
         text = set_nominals(text, values, {k: (study.parameters[k].min,
                                                study.parameters[k].max) for k in values})
-        result["study_text"] = set_calibration(text, names)
+        text = set_calibration(text, names)
+        if result["uncertainty"] is not None:
+            text = set_calibration_result(text, result["uncertainty"])
+        result["study_text"] = text
     return result

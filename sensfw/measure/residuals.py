@@ -44,16 +44,6 @@ def shared_channels(study: Study, measurements: Sequence[Measurement]) -> list[s
     return [study.output] + [c for c in common if c != study.output]
 
 
-def record_kind(m: Measurement) -> str:
-    """What kind of record a measurement is: ``"log_chirp"``, ``"linear_sweep"``,
-    ``"stepped_sine"``, ``"random"`` (time data, from the estimated excitation) or
-    ``"frf"`` (FRFs alone)."""
-    if m.frf is not None:
-        return "frf"
-    kind = getattr(m.sweep, "kind", None)
-    return kind if kind in ("log_chirp", "linear_sweep", "stepped_sine") else "random"
-
-
 def effects_key(effects: EffectSpecs | None) -> tuple:
     return tuple(tuple(sorted(dict(e).items())) for e in effects or ())
 
@@ -68,7 +58,7 @@ class Residuals:
         self.study, self.meas, self.runner = study, list(measurements), runner
         self.space = space
         self.channels = list(channels) if channels else shared_channels(study, measurements)
-        self.kinds = [record_kind(m) for m in self.meas]
+        self.kinds = [m.kind for m in self.meas]
         self.kind_weights: dict[str, float] = {}
         ex = study.excitation
         self.band = (ex.f0, ex.f1)

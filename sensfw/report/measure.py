@@ -12,6 +12,7 @@ from .html import Page
 from .measure_figures import (
     amplitude_plot,
     band_errors,
+    band_plot,
     frf_overlay,
     jump_plot,
     order_spectra,
@@ -123,6 +124,50 @@ def _summary(comparisons) -> pd.DataFrame:
     return frame
 
 
+def _band_frame(bands) -> pd.DataFrame:
+    rows = []
+    for b in bands:
+        inside = b.contains_resonance
+        rows.append({
+            "record": b.file, "kind": b.kind.replace("_", " "), "level": f"{b.level:.3g}",
+            "measured resonance (Hz)": b.resonance_measured,
+            "model band (Hz)": "" if b.resonance_low is None else
+            f"{b.resonance_low:.2f}-{b.resonance_high:.2f}",
+            "inside": "" if inside is None else ("yes" if inside else "NO"),
+            "band width at resonance": "" if b.width_db_at_resonance is None else
+            f"{b.resonance_width_hz:.2f} Hz, {b.width_db_at_resonance:.2f} dB",
+            "extrapolation": b.extrapolation or ""})
+    return pd.DataFrame(rows)
+
+
+def prediction_section(page, comparisons, bands, error_band=None) -> None:
+    """The prediction band of a calibrated study's model on each record."""
+    page.h2("Prediction with the calibration's uncertainty")
+    outside = [b for b in bands if b.contains_resonance is False]
+    page.p("The band spans the calibrated model at the points where the calibration's 95 % "
+           "ellipsoid (its Laplace covariance) meets its principal axes: on each line the "
+           "lowest and highest model FRF, and the lowest and highest resonance. A measured "
+           "resonance outside it is not predicted within the calibration's uncertainty. "
+           "A record of a kind or at a level the calibration did not see is an "
+           "extrapolation.", "note" if outside else "ok")
+    page.table(_band_frame(bands), index=False)
+    page.figure(band_plot(comparisons, bands, error_band),
+                "Measured FRF (black) in the prediction band (blue) of the calibrated model "
+                "(dashed); orange: the band of its resonance.")
+
+
+def write_comparison(out_dir, study, result) -> None:
+    """``out_dir/compare.json`` and ``out_dir/report.html`` of a comparison."""
+    import json
+
+    from ..results import jsonable
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "compare.json").write_text(json.dumps(jsonable(result.to_dict()), indent=1))
+    write_compare_report(study, result, out_dir / "report.html")
+
+
 def write_compare_report(study, result, path) -> Path:
     """The compare report of a :class:`~sensfw.measure.comparison.Comparison`: a summary
     table (one error figure per record, defined once), the FRFs, where the model fails,
@@ -167,6 +212,8 @@ def write_compare_report(study, result, path) -> Path:
     if result.amplitude:
         unit = comparisons[0].unit if comparisons else "N"
         amplitude_section(page, result.amplitude, unit)
+    if result.bands:
+        prediction_section(page, comparisons, result.bands, band)
     page.h2("Per record")
     for c in comparisons:
         page.h3(f"{c.level_text} ({c.file}): FRF error {c.error_db:.2f} dB")

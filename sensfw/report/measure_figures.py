@@ -234,3 +234,44 @@ def amplitude_plot(amplitude: dict, unit: str = "N"):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=3, loc="upper left", bbox_to_anchor=(0, -0.3))
     return fig
+
+
+def band_plot(comparisons, bands, error_band=None):
+    """Per record (one column each, at most four): above, the measured FRF within the
+    prediction band of the calibrated model (shaded) and the calibrated model (dashed) over
+    the error band on a log axis; below, the same around the resonance, its band shaded
+    orange. A record the calibration saw nothing like is titled an extrapolation."""
+    n = min(len(bands), 4)
+    fig, axes = plt.subplots(2, n, figsize=(4.6 * n, 6.2), squeeze=False)
+    for j, (c, b) in enumerate(zip(comparisons[:n], bands[:n], strict=False)):
+        keep = np.ones(len(c.f), bool)
+        if error_band is not None:
+            keep = (c.f >= error_band[0]) & (c.f <= error_band[1])
+        centre = None
+        if b.resonance_low is not None:
+            centre = 0.5 * (b.resonance_low + b.resonance_high)
+        for row, ax in enumerate(axes[:, j]):
+            sel = keep.copy()
+            if row == 1 and centre is not None:
+                half = max(0.06 * centre, 3.0 * (b.resonance_high - b.resonance_low))
+                sel &= (c.f >= centre - half) & (c.f <= centre + half)
+            ax.fill_between(c.f[sel], b.db_low[sel], b.db_high[sel], color="C0", alpha=0.3,
+                            lw=0, label="prediction band")
+            ax.plot(c.f[sel], c.db_model[sel], "C0--", lw=1, label="calibrated model")
+            ax.plot(c.f[sel], c.db_measured[sel], "k-", lw=1, label="measured")
+            if centre is not None:
+                ax.axvspan(b.resonance_low, b.resonance_high, color="C1", alpha=0.3, lw=0,
+                           label="resonance band")
+            if row == 0:
+                ax.set_xscale("log")
+                title = c.level_text + ("  (extrapolation)" if b.extrapolation else "")
+                ax.set_title(title, fontsize=9)
+            else:
+                ax.set_title("around the resonance", fontsize=8)
+            ax.set_xlabel("frequency (Hz)", fontsize=8)
+            ax.set_ylabel("|H| (dB)", fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.grid(True, which="both", alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    fig.tight_layout()
+    return fig

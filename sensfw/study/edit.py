@@ -117,4 +117,30 @@ def set_nominals(text: str, values: Mapping[str, float],
     return tomlkit.dumps(doc)
 
 
-__all__ = ["add_effect", "set_calibration", "set_nominals"]
+def set_calibration_result(text: str, result: Mapping) -> str:
+    """``text`` with ``[calibration.result]`` = ``result`` (:class:`~sensfw.study.schema.
+    CalibrationResult`'s fields: what a calibration found), replacing an older one."""
+    doc = tomlkit.parse(text)
+    cal = _table(doc, "calibration")
+    table = tomlkit.table()
+    for key in ("parameters", "scales"):
+        table[key] = list(result[key])
+    table["coded"] = [float(x) for x in result["coded"]]
+    rows = tomlkit.array()
+    for row in result["covariance"]:
+        rows.append([float(x) for x in row])
+    rows.multiline(True)
+    table["covariance"] = rows
+    recs = tomlkit.array()
+    for r in result.get("records", []):
+        item = tomlkit.inline_table()
+        item.update({k: (float(v) if isinstance(v, (int, float)) else str(v))
+                     for k, v in r.items()})
+        recs.append(item)
+    recs.multiline(True)
+    table["records"] = recs
+    cal["result"] = table
+    return tomlkit.dumps(doc)
+
+
+__all__ = ["add_effect", "set_calibration", "set_calibration_result", "set_nominals"]

@@ -252,6 +252,20 @@ class Study:
                                  f"{', '.join(sorted(known))}"))
         changes, found = bound_overrides(cal.bounds, self.parameters, "calibration.bounds")
         problems += found
+        r = cal.result
+        if r is not None:
+            d = len(r.parameters)
+            for i, name in enumerate(r.parameters):
+                if name not in known:
+                    problems.append((f"calibration.result.parameters[{i}]",
+                                     f"unknown design variable {name!r}"))
+            for key, n in (("scales", len(r.scales)), ("coded", len(r.coded)),
+                           ("covariance", len(r.covariance))):
+                if n != d:
+                    problems.append((f"calibration.result.{key}", f"{n} entries for {d} "
+                                     "parameters"))
+            if any(len(row) != d for row in r.covariance):
+                problems.append(("calibration.result.covariance", f"not a {d} x {d} matrix"))
         return changes
 
     def calibration_space(self, variables: list[str]) -> DesignSpace:

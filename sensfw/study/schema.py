@@ -145,13 +145,27 @@ class StageSpec(_Strict):
         return v
 
 
+class CalibrationResult(_Strict):
+    """What a calibration found, written into the calibrated study by ``sensfw calibrate``
+    and ``sensfw augment`` (:mod:`sensfw.measure.prediction` draws the prediction band of
+    ``sensfw compare`` from it): the calibrated quantities in order, their coding, the
+    calibrated point and its Laplace covariance in that coding, and the records it saw."""
+
+    parameters: list[str]
+    scales: list[Literal["linear", "log", "log1p"]]
+    coded: list[float]
+    covariance: list[list[float]]
+    records: list[dict[str, str | float]] = Field(default_factory=list)
+
+
 class CalibrationSection(_Strict):
     """The base parameters diagnosis calibrates (design-variable names), optionally with
     narrower bounds; without it, every variable the screening stage ranks above its
-    threshold."""
+    threshold. ``result``: what the calibration that wrote the study found."""
 
     parameters: list[str] | None = None
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
+    result: CalibrationResult | None = None
 
 
 class CompareSection(_Strict):

@@ -35,3 +35,64 @@ def test_a_record_unlike_the_calibrations_is_an_extrapolation():
     assert "outside" in extrapolation("random", 0.3, seen)
     assert "saw none" in extrapolation("stepped_sine", 0.1, seen)
     assert extrapolation("random", 5.0, []) is None  # nothing known of the calibration
+
+
+def test_a_calibrated_study_predicts_a_band_that_holds_the_resonance(tmp_path):
+    """End to end on the 2-DOF chain (its resonances known in closed form): a study carrying
+    ``[calibration.result]`` for k1 (written by :func:`set_calibration_result`, read back by
+    the study loader) predicts, for a record made at k1's nominal value, a resonance band
+    whose ends are the first natural frequency at the two ends of k1's 95 % interval
+    (+-1.96 sigma on its log axis), within the FRF's line spacing; the measured resonance
+    lies inside; a record at a level the calibration did not see is an extrapolation."""
+    import tomlkit
+    from scipy.linalg import eigh
+
+    from sensfw.measure.compare import compare_measurements
+    from sensfw.measure.io import write_csv
+    from sensfw.measure.prediction import calibration_result
+    from sensfw.measure.prepared import load_measurements
+    from sensfw.measure.synthetic import Rig, synthesize
+    from sensfw.models.analytic import TwoDOF
+    from sensfw.runs import Runner, RunStore
+    from sensfw.study import Study
+    from sensfw.study.edit import set_calibration_result
+
+    data = {"study": {"name": "rig"}, "model": {"name": "two_dof", "output": "a1"},
+            "excitation": {"kind": "log_chirp", "f0": "100 Hz", "f1": "400 Hz",
+                           "duration": "1 s", "fs": "2 kHz", "amplitude": "0.1 N",
+                           "tail": "0.5 s"},
+            "stages": [{"name": "s", "design": "oat", "scorers": [{"name": "rms"}]}],
+            "calibration": {"parameters": ["k1"]}}
+    study = Study.from_dict(data)
+    coords = Coordinates.of(None, [study.parameters["k1"]])
+    sigma = 0.05  # coded
+    text = set_calibration_result(tomlkit.dumps(data), {
+        "parameters": ["k1"], "scales": [coords.axes[0].scale],
+        "coded": [float(coords.code({"k1": 4000.0})[0])], "covariance": [[sigma**2]],
+        "records": [{"kind": "log_chirp", "level": 0.1}]})
+    (tmp_path / "s.toml").write_text(text)
+    study = Study.load(tmp_path / "s.toml")
+    cal = calibration_result(study)
+    assert cal is not None and cal.covariance[0, 0] == pytest.approx(sigma**2)
+
+    files = []
+    for level in (0.1, 0.3):
+        sig, info = synthesize(study, amplitude=level, rig=Rig(noise=0.005, seed=4))
+        files.append(write_csv(tmp_path / f"m{level}.csv", sig, level=info["amplitude"]))
+    with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
+        cmp = compare_measurements(study, load_measurements(study, [str(f) for f in files]),
+                                   runner)
+    band, far = cmp.bands
+    ends = [cal.coords.decode(cal.z + s * 1.96 * sigma)["k1"] for s in (-1, 1)]
+    model = TwoDOF()
+
+    def first_mode(k1: float) -> float:
+        M, K, _ = model.matrices(model.parameters().complete({"k1": k1}))
+        return float(np.sqrt(eigh(K, M, eigvals_only=True)[0]) / (2 * np.pi))
+
+    lo, hi = first_mode(ends[0]), first_mode(ends[1])
+    spacing = float(np.median(np.diff(band.f[(band.f > 0.8 * lo) & (band.f < 1.2 * hi)])))
+    assert band.resonance_low == pytest.approx(lo, abs=spacing)
+    assert band.resonance_high == pytest.approx(hi, abs=spacing)
+    assert band.contains_resonance and band.extrapolation is None
+    assert "outside" in far.extrapolation

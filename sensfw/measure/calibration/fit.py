@@ -93,6 +93,19 @@ class Fit:
                                 "correlation": float(corr[i, j])})
         return sorted(out, key=lambda t: -abs(t["correlation"]))
 
+    def uncertainty(self, records: list[dict] | None = None) -> dict | None:
+        """What the calibration found, for the calibrated study (``[calibration.result]``,
+        :mod:`sensfw.measure.prediction`): the axes, their coding, the calibrated point and
+        its covariance (coded), and the ``records`` it saw; None without a covariance."""
+        cov = self.covariance()
+        if cov is None:
+            return None
+        return {"parameters": self.coords.names,
+                "scales": [a.scale for a in self.coords.axes],
+                "coded": [float(x) for x in self.z], "covariance": cov.tolist(),
+                "records": [{"kind": r["kind"], "level": float(r["level"])}
+                            for r in records or []]}
+
     def summary(self) -> list[dict]:
         """Per axis: value, 95 % interval, coded standard deviation and flags."""
         cov = self.covariance()
