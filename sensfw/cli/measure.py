@@ -192,7 +192,9 @@ def diagnose(
                     "150 + 50 per level)")] = None,
     prune: Annotated[bool, typer.Option(
         help="leave out candidates whose signature classes the levels do not show "
-             "(--no-prune: try them all)")] = True,
+             "(faster; default --no-prune: race them all, since the classes are read off "
+             "the model calibrated without any effect and a poor fit can hide the "
+             "truth's class)")] = False,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,

@@ -19,7 +19,7 @@ import pytest
 
 from sensfw.models.bolted_beam import BoltedBeam
 from sensfw.study import Study
-from sensfw.studyfile import set_nominals
+from sensfw.study.edit import set_nominals
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -126,7 +126,7 @@ def augmented_study(tmp, values: dict,
     writes)."""
     import tomllib
 
-    from sensfw.studyfile import add_effect
+    from sensfw.study.edit import add_effect
 
     text = (ROOT / "studies" / "bert.toml").read_text(encoding="utf-8")
     for name, place in effects:

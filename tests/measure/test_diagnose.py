@@ -273,7 +273,7 @@ def test_a_second_round_leaves_out_the_effects_the_model_already_has():
     signature classes unless ``prune=False`` (``--no-prune``)."""
     from sensfw.measure.calibration import Coordinates
     from sensfw.measure.hypotheses import candidates
-    from sensfw.studyfile import add_effect
+    from sensfw.study.edit import add_effect
 
     root = Path(__file__).resolve().parents[2]
     text = add_effect((root / "studies" / "bert.toml").read_text(encoding="utf-8"),
@@ -300,7 +300,7 @@ def test_a_candidate_on_an_augmented_model_keeps_the_models_effects():
     the first effect's parameters and every run of the round failed."""
     from sensfw.evaluate import model_with_effects, variant_spec
     from sensfw.runs.spec import build_model
-    from sensfw.studyfile import add_effect
+    from sensfw.study.edit import add_effect
 
     root = Path(__file__).resolve().parents[2]
     text = add_effect((root / "studies" / "bert.toml").read_text(encoding="utf-8"),

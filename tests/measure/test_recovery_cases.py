@@ -1,0 +1,40 @@
+"""A fixed-seed subset of the recovery benchmark (``bench/recovery.py``, issue 25): cases
+drawn by :func:`sensfw.measure.cases.draw` from the benchmark's seeds, diagnosed with the
+default budget on the short quick study, must end as the benchmark counts right: the effect
+and place named when the data can tell, "parameters"/"none" otherwise, and the true
+hypothesis calibrated to within its noise (chi2/n <= 1 + 3 sqrt(2/n), three standard
+deviations of a chi-square's mean). The rates over random draws are the benchmark's
+(README, "Benchmarks"); these cases keep its machinery honest in the suite."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.slow
+
+BENCH = Path(__file__).resolve().parents[2] / "bench" / "recovery.py"
+#: benchmark case index -> seed 2025 + index (bench/recovery.py --seed 2025)
+CASES = [1, 3]
+
+
+@pytest.fixture(scope="module")
+def recovery():
+    spec = importlib.util.spec_from_file_location("sensfw_bench_recovery", BENCH)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize("index", CASES)
+def test_a_benchmark_case_ends_right(index, recovery):
+    from sensfw.measure import cases
+
+    study = recovery.bench_study("quick", short=True)
+    case = cases.draw(study, 2025 + index, recovery.LEVELS["quick"])
+    row = recovery.run_case(study, case, "dfols", workers=2)
+    assert row["outcome"] in ("right", "correct", "correct (cannot tell)"), row
+    assert row["noise_reached"], row
+    assert row["simulations"] <= 150 + 50 * len(case["levels"]), row
