@@ -28,11 +28,13 @@ criterion value).
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated, Literal
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
+from ..options import Int
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import linear_importance
@@ -142,25 +144,12 @@ class OptimalDesign(FullFactorial):
     a quadratic fit in coded units (as Box-Behnken)."""
 
     name = "optimal"
-    defaults: ClassVar[dict] = {**FullFactorial.defaults, "runs": None, "criterion": "D",
-                                "augment": None, "starts": 10}
-
-    def validate(self):
-        super().validate()
-        o = self.options
-        if o["runs"] is not None and (isinstance(o["runs"], bool)
-                                      or not isinstance(o["runs"], int) or o["runs"] < 1):
-            raise DesignError(f"design {self.name!r}: runs must be a positive integer, got "
-                              f"{o['runs']!r}", option="runs")
-        if o["criterion"] not in CRITERIA:
-            raise DesignError(f"design {self.name!r}: criterion must be 'D' or 'I', got "
-                              f"{o['criterion']!r}", option="criterion")
-        if o["augment"] not in (None, "oat"):
-            raise DesignError(f"design {self.name!r}: augment must be 'oat' or absent, got "
-                              f"{o['augment']!r}", option="augment")
-        if isinstance(o["starts"], bool) or not isinstance(o["starts"], int) or o["starts"] < 1:
-            raise DesignError(f"design {self.name!r}: starts must be a positive integer, got "
-                              f"{o['starts']!r}", option="starts")
+    class Options(FullFactorial.Options):
+        runs: Annotated[Int, Field(ge=1)] | None = Field(
+            None, description="a positive integer (default: Eq. 18's coefficients + 5)")
+        criterion: Literal["D", "I"] = Field("D", description="'D' or 'I'")
+        augment: Literal["oat"] | None = Field(None, description="'oat' or absent")
+        starts: Annotated[Int, Field(ge=1)] = Field(10, description="a positive integer")
 
     def _fixed(self, space: DesignSpace) -> pd.DataFrame:
         if self.options["augment"] == "oat":
