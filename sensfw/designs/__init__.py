@@ -7,6 +7,7 @@ from . import (  # noqa: F401  (register the built-ins)
     full_factorial,
     morris,
     oat,
+    optimal,
     response_surface,
     sobol,
     subset,
