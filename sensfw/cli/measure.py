@@ -192,9 +192,8 @@ def diagnose(
                     "150 + 50 per level)")] = None,
     prune: Annotated[bool, typer.Option(
         help="leave out candidates whose signature classes the levels do not show "
-             "(faster; default --no-prune: race them all, since the classes are read off "
-             "the model calibrated without any effect and a poor fit can hide the "
-             "truth's class)")] = False,
+             "(--no-prune: race them all; the classes are read off the model calibrated "
+             "without any effect, and a poor fit can hide the truth's class)")] = True,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
