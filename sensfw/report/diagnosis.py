@@ -104,7 +104,7 @@ def write_diagnose_report(study, result, path) -> Path:
     """``result`` is a :class:`sensfw.measure.diagnose.DiagnoseResult`."""
     page = Page(f"sensfw: which physical effect is missing? ({study.name})",
                 f"verdict: {result.verdict} — {result.n_simulations} simulations")
-    page.p(f"Verdict: {result.verdict}. {result.reason}.", "ok" if result.verdict != "none"
+    page.p(f"Verdict: {result.verdict}: {result.reason}.", "ok" if result.verdict != "none"
            else "note")
     page.p("Every hypothesis recalibrates the base parameters "
            f"({', '.join(result.variables)}, from {result.variables_from}): 'parameters' "
