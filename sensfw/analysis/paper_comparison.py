@@ -23,6 +23,10 @@ Each score of the stage is fitted twice beside the paper's table:
 Significance is ``p < alpha`` (the paper's 0.05). Linear terms in physical units test the
 slope at x = 0 (outside the design for x2), so their sign and p depend on the fit's form;
 interactions and squares are the same in every affine coding.
+
+(Over the usual 400 lines: the reference file's checks, the two fits and the side-by-side
+table all follow the one mapping of the paper's factors and responses to the stage's; a
+split would pass that mapping around instead of keeping it in one place.)
 """
 
 from __future__ import annotations

@@ -30,9 +30,6 @@ noise alone produces (see there).
 (diagnosis uses it to prune its candidates); :func:`sentences` say it as a test engineer
 would; :func:`amplitude_dependence` bundles all of it for ``compare.json``.
 
-(Longer than the project's usual 400 lines: the tracking, the classes and the sentences all
-read the one table structure built here; apart, each would need the others' internals.)
-
 (Over the usual 400 lines: the table, the classes with their thresholds and the sentences
 share the per-resonance tracking and are read together; split apart, each would reach into
 the others' internals.)

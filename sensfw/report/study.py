@@ -2,7 +2,10 @@
 
 It reads a :class:`~sensfw.pipeline.StudyResult`: the stages and the run store, never a
 runner, so a report can be rebuilt from an output folder (``sensfw report DIR``,
-:func:`~sensfw.pipeline.load_result`)."""
+:func:`~sensfw.pipeline.load_result`).
+
+(Over the usual 400 lines: one figure function per figure of the paper and the page that
+orders them; the figures share the stage's tables and a split would only scatter them.)"""
 
 from __future__ import annotations
 

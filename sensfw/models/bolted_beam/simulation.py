@@ -15,6 +15,10 @@ step, or an explicit Runge-Kutta method (see :class:`~.model.BoltedBeam` for why
 A step whose Newton iteration fails is retried by Exudyn at half the step, at most
 ``STEP_REDUCTIONS`` times; one that fails at the smallest of them ends the run with
 ``exudyn.SolverError`` at once (see :func:`solve`).
+
+(Over the usual 400 lines: building the Exudyn system and solving it share the node,
+marker and connector bookkeeping of one structure; apart, the solver would reach into the
+builder's internals.)
 """
 
 from __future__ import annotations
