@@ -275,10 +275,9 @@ def augment(
         if t["error"] is None:
             out.print(f"  {t['step']:20s} its runs failed (see the run store)")
             continue
-        per = t.get("error_per_level") or []
-        levels = ", ".join(f"{e:.2f}" for e in per)
+        per = per_record(t)
         out.print(f"  {t['step']:20s} error {t['error']:.3f} dB" +
-                  (f" (per level: {levels})" if len(per) > 1 else ""))
+                  (f" ({per})" if len(t.get("error_per_level") or []) > 1 else ""))
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
 
@@ -313,6 +312,17 @@ def calibrate(
         out.print(f"  {c['name']} = {c['value']:.4g} {c['unit']} "
                   f"[{c['interval'][0]:.4g}, {c['interval'][1]:.4g}]{flags}")
     for t in result["trajectory"]:
-        per = ", ".join(f"{e:.2f}" for e in t["error_per_level"])
-        out.print(f"  {t['step']:14s} error {t['error']:.3f} dB (per level: {per})")
+        out.print(f"  {t['step']:14s} error {t['error']:.3f} dB ({per_record(t)})")
     out.print(f"-> {out_dir}/study.toml, {out_dir}/calibrate.json, {out_dir}/report.html")
+
+
+def per_record(step: dict) -> str:
+    """A trajectory step's error per record: "per level: 3.71, 4.70" when the records are
+    of one kind, else "per record: log chirp 0.05 3.71, random 0.05 4.70"."""
+    per = step.get("error_per_level") or []
+    kinds = step.get("kinds") or []
+    if len(set(kinds)) <= 1:
+        return "per level: " + ", ".join(f"{e:.2f}" for e in per)
+    return "per record: " + ", ".join(
+        f"{k.replace('_', ' ')} {lv:g} {e:.2f}"
+        for k, lv, e in zip(kinds, step["levels"], per, strict=False))
