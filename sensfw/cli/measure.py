@@ -16,15 +16,13 @@ from .common import (
     ShowProgress,
     Workers,
     _running,
-    _user_errors,
-    app,
+    command,
     out,
     say,
 )
 
 
-@app.command()
-@_user_errors
+@command()
 def simulate(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     out_file: Annotated[Path, typer.Option(
@@ -118,8 +116,7 @@ def _band_option(text: str | None, option: str) -> tuple[float, float] | None:
     return lo, hi
 
 
-@app.command()
-@_user_errors
+@command()
 def compare(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,
@@ -178,8 +175,7 @@ def compare(
     out.print(f"-> {out_dir}/compare.json, {out_dir}/report.html")
 
 
-@app.command()
-@_user_errors
+@command()
 def diagnose(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,
@@ -232,8 +228,7 @@ def diagnose(
     out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
 
 
-@app.command()
-@_user_errors
+@command()
 def augment(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,
@@ -282,8 +277,7 @@ def augment(
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
 
-@app.command()
-@_user_errors
+@command()
 def calibrate(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     measured: Measured,

@@ -19,15 +19,13 @@ from .common import (
     _json,
     _runner,
     _running,
-    _user_errors,
-    app,
+    command,
     out,
     say,
 )
 
 
-@app.command()
-@_user_errors
+@command()
 def run(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="output folder")] = Path("out"),
@@ -76,8 +74,7 @@ def run(
                 out.print(f"  {st.name}: {label} / {name}: R2adj={adj} Q2(LOO)={q2}")
 
 
-@app.command()
-@_user_errors
+@command()
 def report(
     out_dir: Annotated[Path, typer.Argument(help="output folder of `sensfw run`")],
 ) -> None:
@@ -93,8 +90,7 @@ def report(
 
 
 
-@app.command("compare-designs")
-@_user_errors
+@command("compare-designs")
 def compare_designs_cmd(
     study_file: Annotated[Path, typer.Argument(help="study TOML file")],
     designs: Annotated[str, typer.Option(help="comma-separated design names")] =
@@ -142,8 +138,7 @@ def compare_designs_cmd(
 
 
 
-@app.command()
-@_user_errors
+@command()
 def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]) -> None:
     """Check a study file and print its plan."""
     from ..study import Study
@@ -153,8 +148,7 @@ def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]
               f"{len(study.variable_names())} design variables, {len(study.stages)} stages")
 
 
-@app.command()
-@_user_errors
+@command()
 def plugins() -> None:
     """List every registered plugin with its origin."""
     from ..plugins import ALL
@@ -169,8 +163,7 @@ def plugins() -> None:
     out.print(table)
 
 
-@app.command()
-@_user_errors
+@command()
 def places(
     model: Annotated[str, typer.Argument(help="model name (see `sensfw plugins`)")] =
     "shaft_assembly",
