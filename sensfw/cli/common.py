@@ -31,6 +31,9 @@ def say(text: str, style: str = "cyan") -> None:
     console.print(f"[{style}]{escape(text)}[/]", highlight=False)
 
 
+StudyFile = Annotated[Path, typer.Argument(help="study TOML file")]
+#: the output folder of a command (the default is the command's own)
+OutDir = Annotated[Path, typer.Option("--out", "-o")]
 Workers = Annotated[int | None, typer.Option(help="worker processes (default: cores)")]
 Backend = Annotated[str | None, typer.Option(help="serial | processes | dask")]
 Scheduler = Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")]

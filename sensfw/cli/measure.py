@@ -12,8 +12,10 @@ from ..errors import SensfwError
 from .common import (
     Backend,
     Measured,
+    OutDir,
     Scheduler,
     ShowProgress,
+    StudyFile,
     Workers,
     _running,
     command,
@@ -24,7 +26,7 @@ from .common import (
 
 @command()
 def simulate(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     out_file: Annotated[Path, typer.Option(
         "--out", "-o", help="measurement file to write: .csv (one per level) or .uff (all "
                             "levels in one file)")],
@@ -118,9 +120,9 @@ def _band_option(text: str | None, option: str) -> tuple[float, float] | None:
 
 @command()
 def compare(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
+    out_dir: OutDir = Path("out/compare"),
     error_band: Annotated[str | None, typer.Option(
         help="the band LO,HI Hz of each record's FRF error (default: the study's band)"
     )] = None,
@@ -177,9 +179,9 @@ def compare(
 
 @command()
 def diagnose(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/diagnose"),
+    out_dir: OutDir = Path("out/diagnose"),
     candidates: Annotated[str | None, typer.Option(
         help="comma-separated effects, NAME or NAME@PLACE (default: every registered effect "
              "at every place it fits)")] = None,
@@ -230,10 +232,10 @@ def diagnose(
 
 @command()
 def augment(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
     effect: Annotated[str, typer.Option(help="effect to add, NAME[@PLACE]")],
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
+    out_dir: OutDir = Path("out/augment"),
     start_from: Annotated[Path | None, typer.Option(
         help="diagnose.json: start from the values diagnose found for this effect")] = None,
     budget: Annotated[int | None, typer.Option(
@@ -279,9 +281,9 @@ def augment(
 
 @command()
 def calibrate(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/calibrate"),
+    out_dir: OutDir = Path("out/calibrate"),
     budget: Annotated[int | None, typer.Option(
         min=1, help="simulations, one per point and level (default 60 per level)")] = None,
     workers: Workers = None,

@@ -13,8 +13,10 @@ from rich.table import Table
 from ..errors import SensfwError
 from .common import (
     Backend,
+    OutDir,
     Scheduler,
     ShowProgress,
+    StudyFile,
     Workers,
     _json,
     _runner,
@@ -27,7 +29,7 @@ from .common import (
 
 @command()
 def run(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="output folder")] = Path("out"),
     workers: Workers = None,
     backend: Backend = None,
@@ -92,7 +94,7 @@ def report(
 
 @command("compare-designs")
 def compare_designs_cmd(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     designs: Annotated[str, typer.Option(help="comma-separated design names")] =
     "oat,morris,definitive_screening,fractional_factorial,lhs",
     option: Annotated[list[str] | None, typer.Option(
@@ -100,7 +102,7 @@ def compare_designs_cmd(
     reference_runs: Annotated[int | None, typer.Option(
         help="runs of the reference Latin hypercube (default 10 per variable)")] = None,
     reference_surrogate: Annotated[str, typer.Option()] = "gaussian_process",
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/designs"),
+    out_dir: OutDir = Path("out/designs"),
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -139,7 +141,7 @@ def compare_designs_cmd(
 
 
 @command()
-def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]) -> None:
+def validate(study_file: StudyFile) -> None:
     """Check a study file and print its plan."""
     from ..study import Study
 
