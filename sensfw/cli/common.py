@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
@@ -30,6 +31,9 @@ def say(text: str, style: str = "cyan") -> None:
     console.print(f"[{style}]{escape(text)}[/]", highlight=False)
 
 
+StudyFile = Annotated[Path, typer.Argument(help="study TOML file")]
+#: the output folder of a command (the default is the command's own)
+OutDir = Annotated[Path, typer.Option("--out", "-o")]
 Workers = Annotated[int | None, typer.Option(help="worker processes (default: cores)")]
 Backend = Annotated[str | None, typer.Option(help="serial | processes | dask")]
 Scheduler = Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")]
@@ -49,6 +53,14 @@ def _user_errors(fn):
             console.print("[yellow]interrupted; finished runs are kept in the run store[/]")
             raise typer.Exit(code=130) from None
     return wrapper
+
+
+def command(name: str | None = None) -> Callable[[Callable], Callable]:
+    """Register a function as a command of :data:`app` (named ``name``, default: after the
+    function) whose user errors exit with status 2 (:func:`_user_errors`)."""
+    def register(fn: Callable) -> Callable:
+        return app.command(name)(_user_errors(fn))
+    return register
 
 
 class RichProgress:

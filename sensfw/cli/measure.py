@@ -12,21 +12,21 @@ from ..errors import SensfwError
 from .common import (
     Backend,
     Measured,
+    OutDir,
     Scheduler,
     ShowProgress,
+    StudyFile,
     Workers,
     _running,
-    _user_errors,
-    app,
+    command,
     out,
     say,
 )
 
 
-@app.command()
-@_user_errors
+@command()
 def simulate(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     out_file: Annotated[Path, typer.Option(
         "--out", "-o", help="measurement file to write: .csv (one per level) or .uff (all "
                             "levels in one file)")],
@@ -118,12 +118,11 @@ def _band_option(text: str | None, option: str) -> tuple[float, float] | None:
     return lo, hi
 
 
-@app.command()
-@_user_errors
+@command()
 def compare(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/compare"),
+    out_dir: OutDir = Path("out/compare"),
     error_band: Annotated[str | None, typer.Option(
         help="the band LO,HI Hz of each record's FRF error (default: the study's band)"
     )] = None,
@@ -178,12 +177,11 @@ def compare(
     out.print(f"-> {out_dir}/compare.json, {out_dir}/report.html")
 
 
-@app.command()
-@_user_errors
+@command()
 def diagnose(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/diagnose"),
+    out_dir: OutDir = Path("out/diagnose"),
     candidates: Annotated[str | None, typer.Option(
         help="comma-separated effects, NAME or NAME@PLACE (default: every registered effect "
              "at every place it fits)")] = None,
@@ -232,13 +230,12 @@ def diagnose(
     out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
 
 
-@app.command()
-@_user_errors
+@command()
 def augment(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
     effect: Annotated[str, typer.Option(help="effect to add, NAME[@PLACE]")],
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/augment"),
+    out_dir: OutDir = Path("out/augment"),
     start_from: Annotated[Path | None, typer.Option(
         help="diagnose.json: start from the values diagnose found for this effect")] = None,
     budget: Annotated[int | None, typer.Option(
@@ -281,12 +278,11 @@ def augment(
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
 
-@app.command()
-@_user_errors
+@command()
 def calibrate(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     measured: Measured,
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/calibrate"),
+    out_dir: OutDir = Path("out/calibrate"),
     budget: Annotated[int | None, typer.Option(
         min=1, help="simulations, one per point and level (default 60 per level)")] = None,
     workers: Workers = None,

@@ -13,23 +13,23 @@ from rich.table import Table
 from ..errors import SensfwError
 from .common import (
     Backend,
+    OutDir,
     Scheduler,
     ShowProgress,
+    StudyFile,
     Workers,
     _json,
     _runner,
     _running,
-    _user_errors,
-    app,
+    command,
     out,
     say,
 )
 
 
-@app.command()
-@_user_errors
+@command()
 def run(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     out_dir: Annotated[Path, typer.Option("--out", "-o", help="output folder")] = Path("out"),
     workers: Workers = None,
     backend: Backend = None,
@@ -76,8 +76,7 @@ def run(
                 out.print(f"  {st.name}: {label} / {name}: R2adj={adj} Q2(LOO)={q2}")
 
 
-@app.command()
-@_user_errors
+@command()
 def report(
     out_dir: Annotated[Path, typer.Argument(help="output folder of `sensfw run`")],
 ) -> None:
@@ -93,10 +92,9 @@ def report(
 
 
 
-@app.command("compare-designs")
-@_user_errors
+@command("compare-designs")
 def compare_designs_cmd(
-    study_file: Annotated[Path, typer.Argument(help="study TOML file")],
+    study_file: StudyFile,
     designs: Annotated[str, typer.Option(help="comma-separated design names")] =
     "oat,morris,definitive_screening,fractional_factorial,lhs",
     option: Annotated[list[str] | None, typer.Option(
@@ -104,7 +102,7 @@ def compare_designs_cmd(
     reference_runs: Annotated[int | None, typer.Option(
         help="runs of the reference Latin hypercube (default 10 per variable)")] = None,
     reference_surrogate: Annotated[str, typer.Option()] = "gaussian_process",
-    out_dir: Annotated[Path, typer.Option("--out", "-o")] = Path("out/designs"),
+    out_dir: OutDir = Path("out/designs"),
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -142,9 +140,8 @@ def compare_designs_cmd(
 
 
 
-@app.command()
-@_user_errors
-def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]) -> None:
+@command()
+def validate(study_file: StudyFile) -> None:
     """Check a study file and print its plan."""
     from ..study import Study
 
@@ -153,8 +150,7 @@ def validate(study_file: Annotated[Path, typer.Argument(help="study TOML file")]
               f"{len(study.variable_names())} design variables, {len(study.stages)} stages")
 
 
-@app.command()
-@_user_errors
+@command()
 def plugins() -> None:
     """List every registered plugin with its origin."""
     from ..plugins import ALL
@@ -169,8 +165,7 @@ def plugins() -> None:
     out.print(table)
 
 
-@app.command()
-@_user_errors
+@command()
 def places(
     model: Annotated[str, typer.Argument(help="model name (see `sensfw plugins`)")] =
     "shaft_assembly",

@@ -3,7 +3,8 @@ central composite."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from abc import abstractmethod
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 import pandas as pd
@@ -48,12 +49,35 @@ class LatinHypercube(Design):
         return ScreeningResult(importance=imp, table=tab, notes=notes)
 
 
+class _QuadraticDesign(Design):
+    """A response-surface design: the pyDOE3 matrix of :meth:`_matrix` in coded units, its
+    runs labelled ``label``. Analysis: ``|b_i| + |b_ii|`` of a quadratic fit in coded
+    units."""
+
+    label: ClassVar[str]
+
+    @abstractmethod
+    def _matrix(self, k: int) -> np.ndarray:
+        """The coded design matrix for ``k`` variables."""
+
+    def n_runs(self, space: DesignSpace) -> int:
+        return len(self._matrix(len(space)))
+
+    def generate(self, space: DesignSpace, seed=None) -> pd.DataFrame:
+        return to_table(space, self._matrix(len(space)), self.label)
+
+    def analyze(self, space, table, y) -> ScreeningResult:
+        imp, tab, notes = linear_importance(space, table, responses(table, y, self.name), True)
+        return ScreeningResult(importance=imp, table=tab, notes=notes)
+
+
 @designs.register("box_behnken")
-class BoxBehnken(Design):
+class BoxBehnken(_QuadraticDesign):
     """Box-Behnken design (3 levels, no corners; needs >= 3 variables) with ``center`` centre
     runs. Analysis: ``|b_i| + |b_ii|`` of a quadratic fit in coded units."""
 
     name = "box_behnken"
+    label = "bbd"
 
     class Options(PluginOptions):
         center: Annotated[Int, Field(ge=1)] = Field(1, description="an integer >= 1")
@@ -65,25 +89,16 @@ class BoxBehnken(Design):
             raise DesignError(f"design 'box_behnken' needs at least 3 variables, got {k}")
         return bbdesign(k, center=self.options["center"])
 
-    def n_runs(self, space):
-        return len(self._matrix(len(space)))
-
-    def generate(self, space, seed=None):
-        return to_table(space, self._matrix(len(space)), "bbd")
-
-    def analyze(self, space, table, y) -> ScreeningResult:
-        imp, tab, notes = linear_importance(space, table, responses(table, y, self.name), True)
-        return ScreeningResult(importance=imp, table=tab, notes=notes)
-
 
 @designs.register("central_composite")
-class CentralComposite(Design):
+class CentralComposite(_QuadraticDesign):
     """Central composite design: 2-level factorial, axial and centre runs (pyDOE3
     ``ccdesign``). ``face``: "ccf" (face-centred, default: every run inside the bounds) or
     "cci" (inscribed); circumscribed designs are refused because their axial runs leave the
     bounds. Analysis as Box-Behnken."""
 
     name = "central_composite"
+    label = "ccd"
 
     class Options(PluginOptions):
         face: Literal["ccf", "cci"] = Field(
@@ -102,13 +117,3 @@ class CentralComposite(Design):
         if np.max(np.abs(X)) > 1 + 1e-9:
             raise DesignError("design 'central_composite' produced runs outside the bounds")
         return X
-
-    def n_runs(self, space):
-        return len(self._matrix(len(space)))
-
-    def generate(self, space, seed=None):
-        return to_table(space, self._matrix(len(space)), "ccd")
-
-    def analyze(self, space, table, y) -> ScreeningResult:
-        imp, tab, notes = linear_importance(space, table, responses(table, y, self.name), True)
-        return ScreeningResult(importance=imp, table=tab, notes=notes)

@@ -17,9 +17,8 @@ from ..study import Study
 from ..study.edit import add_effect, set_calibration, set_calibration_result
 from .calibration import Coordinates
 from .diagnose import _around, calibrate_hypothesis, workers_of
-from .hypotheses import Hypothesis, calibration_variables, neutral_values
+from .hypotheses import Hypothesis, calibration_residuals, neutral_values
 from .io import Measurement
-from .residuals import Residuals
 from .scatter import widen_for_roughness
 
 
@@ -41,17 +40,12 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     kept); the result's ``"study_text"`` is the augmented study."""
     eff = effect_registry.get(effect)(attach=attach)
     model_with_effects(study, [eff])  # resolves (and checks) where it attaches
-    names, source = calibration_variables(study, runner, log)
-    space = study.calibration_space(names)
-    res = Residuals(study, measurements, runner, space)
+    names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
     q = workers_of(runner)
     base = Coordinates.of(space)
-    nominal = space.nominal_row()
-    (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
-    if nominal_cmp is None:
-        raise SensfwError("the study's model failed at the measured level(s)")
+    nominal, _ = res.nominal()
     log(f"recalibrating the base variables {', '.join(names)} ({source})")
     h0 = Hypothesis(None, "", base)
     if base_start is not None:

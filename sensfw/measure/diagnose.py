@@ -29,12 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import SensfwError
 from ..runs import Runner, default_workers
 from ..study import Study
 from . import discrepancy, signatures
 from .calibration import Coordinates, Fit, Trial, calibrate
-from .hypotheses import Hypothesis, calibration_variables
+from .hypotheses import Hypothesis, calibration_residuals
 from .hypotheses import candidates as candidate_hypotheses
 from .io import Measurement
 from .ranking import TIE_BIC, heldout, verdict
@@ -96,20 +95,14 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     :mod:`.calibration.refine`); ``global_phase=False`` leaves out the design and the
     surrogate search (a local calibration from the start values, as diagnosis did before:
     ``bench/recovery.py --method local``)."""
-    names, source = calibration_variables(study, runner, log)
-    space = study.calibration_space(names)
-    res = Residuals(study, measurements, runner, space)
+    names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
     q = workers_of(runner)
     opts = {"q": q, "local": local} if global_phase else \
         {"q": q, "local": local, "global_share": 0.0, "n_design": 0}
     base = Coordinates.of(space)
-    nominal = space.nominal_row()
-    (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
-    if nominal_cmp is None:
-        raise SensfwError("the study's model failed at the measured level(s); nothing to "
-                          "compare (see the run store)")
+    _, nominal_cmp = res.nominal("; nothing to compare (see the run store)")
     n = res.entries.size()
 
     # 1. H0 globally, the model's scatter around it

@@ -12,11 +12,14 @@ from dataclasses import dataclass, field
 from ..errors import SensfwError
 from ..evaluate import model_with_effects
 from ..models.places import fitting_places
+from ..params import DesignSpace
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
 from . import discrepancy, signatures
 from .calibration import Coordinates, Fit
+from .io import Measurement
+from .residuals import Residuals
 
 Log = Callable[[str], None]
 
@@ -42,6 +45,16 @@ def calibration_variables(study: Study, runner: Runner, log: Log = lambda s: Non
     names = [n for n in imp.sort_values(ascending=False).index
              if imp[n] >= stage.select.threshold]
     return names, f"screen {stage.name!r} above {stage.select.threshold:.0%}"
+
+
+def calibration_residuals(study: Study, measurements: Sequence[Measurement], runner: Runner,
+                          log: Log = lambda s: None
+                          ) -> tuple[list[str], str, DesignSpace, Residuals]:
+    """Where H0 is calibrated: the :func:`calibration_variables` and where they come from,
+    their design space, and the residuals of ``measurements`` over it."""
+    names, source = calibration_variables(study, runner, log)
+    space = study.calibration_space(names)
+    return names, source, space, Residuals(study, measurements, runner, space)
 
 
 def neutral_values(effect) -> dict[str, float]:

@@ -9,7 +9,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import SensfwError
 from ..runs import Runner
 from ..study import Study
 from ..study.edit import set_calibration, set_calibration_result, set_nominals
@@ -17,9 +16,8 @@ from . import discrepancy
 from .augment import _source_text
 from .calibration import Coordinates
 from .diagnose import calibrate_hypothesis, workers_of
-from .hypotheses import Hypothesis, calibration_variables
+from .hypotheses import Hypothesis, calibration_residuals
 from .io import Measurement
-from .residuals import Residuals
 from .scatter import widen_for_roughness
 
 
@@ -33,16 +31,11 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
                 study_text: str | None = None, log=lambda s: None) -> dict:
     """Calibrate the study's base variables alone (module docstring); ``budget`` counts
     simulations (one per point and level; default 60 points)."""
-    names, source = calibration_variables(study, runner, log)
-    space = study.calibration_space(names)
-    res = Residuals(study, measurements, runner, space)
+    names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
     base = Coordinates.of(space)
-    nominal = space.nominal_row()
-    (nominal_cmp,) = res.comparisons(None, [nominal], "nominal model")
-    if nominal_cmp is None:
-        raise SensfwError("the study's model failed at the measured level(s)")
+    nominal, nominal_cmp = res.nominal()
     log(f"calibrating {', '.join(names)} ({source}), {budget} simulations")
     h0 = Hypothesis(None, "", base)
     fit = calibrate_hypothesis(res, h0, budget // n_levels, q=workers_of(runner),

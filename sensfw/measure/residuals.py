@@ -24,6 +24,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from ..errors import SensfwError
 from ..evaluate import simulate, variant_spec
 from ..params import DesignSpace
 from ..runs import Runner
@@ -123,6 +124,15 @@ class Residuals:
             pool += [(tuple(idx), Trial(dict(p), self.weighted(c, levels)))
                      for p, c in zip(points, out, strict=True)]
         return out
+
+    def nominal(self, hint: str = "") -> tuple[dict[str, float], list[LevelComparison]]:
+        """The space's nominal point and the model's comparisons there (batch ``"nominal
+        model"``); a :class:`~sensfw.errors.SensfwError` (ending in ``hint``) where it fails."""
+        nominal = self.space.nominal_row()
+        (comps,) = self.comparisons(None, [nominal], "nominal model")
+        if comps is None:
+            raise SensfwError("the study's model failed at the measured level(s)" + hint)
+        return nominal, comps
 
     def evaluate(self, effects: EffectSpecs | None, points: Sequence[Mapping[str, float]],
                  label: str, levels: Sequence[int] | None = None

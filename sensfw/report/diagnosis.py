@@ -282,33 +282,29 @@ def write_diagnosis(out_dir, study, result, wall_s: float | None = None) -> dict
     return data
 
 
-def write_augmentation(out_dir, study, result: dict) -> None:
-    """``out_dir/study.toml`` (the augmented study, checked to load), ``augment.json`` and
-    ``report.html`` of :func:`sensfw.measure.augment.augment`."""
+def _write_study_result(out_dir, study, result: dict, json_name: str, write_report) -> None:
+    """``out_dir/study.toml`` (``result["study_text"]``, checked to load), ``json_name`` (the
+    result without its comparisons and study text) and ``report.html`` by ``write_report``."""
     from ..study import Study
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if result.get("study_text") is not None:
         (out_dir / "study.toml").write_text(result["study_text"], encoding="utf-8")
-        Study.load(out_dir / "study.toml")  # the augmented file must itself be valid
+        Study.load(out_dir / "study.toml")  # the written file must itself be valid
     comps = result.get("_comparisons")
-    _write_json(out_dir / "augment.json", {k: v for k, v in result.items()
-                                           if k not in ("_comparisons", "study_text")})
-    write_augment_report(study, result, out_dir / "report.html", comps)
+    _write_json(out_dir / json_name, {k: v for k, v in result.items()
+                                      if k not in ("_comparisons", "study_text")})
+    write_report(study, result, out_dir / "report.html", comps)
+
+
+def write_augmentation(out_dir, study, result: dict) -> None:
+    """``out_dir/study.toml`` (the augmented study, checked to load), ``augment.json`` and
+    ``report.html`` of :func:`sensfw.measure.augment.augment`."""
+    _write_study_result(out_dir, study, result, "augment.json", write_augment_report)
 
 
 def write_calibration(out_dir, study, result: dict) -> None:
     """``out_dir/study.toml`` (the calibrated study), ``calibrate.json`` and ``report.html``
     of :func:`sensfw.measure.recalibrate.recalibrate`."""
-    from ..study import Study
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    if result.get("study_text") is not None:
-        (out_dir / "study.toml").write_text(result["study_text"], encoding="utf-8")
-        Study.load(out_dir / "study.toml")  # the calibrated file must itself be valid
-    comps = result.get("_comparisons")
-    _write_json(out_dir / "calibrate.json", {k: v for k, v in result.items()
-                                             if k not in ("_comparisons", "study_text")})
-    write_calibrate_report(study, result, out_dir / "report.html", comps)
+    _write_study_result(out_dir, study, result, "calibrate.json", write_calibrate_report)
