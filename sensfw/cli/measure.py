@@ -53,19 +53,11 @@ def simulate(
     """Simulate one configuration and write it as a rig would record it (synthetic data)."""
     from ..excitation import KINDS
     from ..measure.io import write_csv, write_uff
-    from ..measure.synthetic import Rig, synthesize
+    from ..measure.synthetic import Rig, parse_assignments, synthesize
     from ..study import Study
 
     study = Study.load(study_file)
-    sets = {}
-    for item in set_ or []:
-        key, sep, val = item.partition("=")
-        if not sep:
-            raise SensfwError(f"--set {item!r}: expected NAME=VALUE")
-        try:
-            sets[key.strip()] = float(val)
-        except ValueError:
-            raise SensfwError(f"--set {item!r}: expected NAME=VALUE with a number") from None
+    sets = parse_assignments(set_ or [], "--set")
     if excitation is not None and (excitation not in KINDS or excitation == "sampled"):
         raise SensfwError(f"--excitation {excitation!r}: use one of log_chirp, linear_sweep, "
                           "random, stepped_sine")

@@ -13,7 +13,7 @@ This is how tests and demos make data whose answer is known (``sensfw simulate``
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -32,17 +32,23 @@ def parse_effect(text: str) -> tuple[dict, dict[str, float]]:
     spec = {"name": name.strip()}
     if attach:
         spec["attach"] = attach.strip()
+    items = filter(None, (s.strip() for s in tail.split(",")))
+    return spec, parse_assignments(items, f"effect {text!r}")
+
+
+def parse_assignments(items: Iterable[str], where: str) -> dict[str, float]:
+    """``["NAME=VALUE", ...]`` -> ``{NAME: VALUE}``; a clear error naming ``where`` (the
+    option or effect the items came from) for an item without ``=`` or with no number."""
     values = {}
-    for item in filter(None, (s.strip() for s in tail.split(","))):
+    for item in items:
         key, sep, val = item.partition("=")
         if not sep:
-            raise SensfwError(f"effect {text!r}: expected PARAM=VALUE, got {item!r}")
+            raise SensfwError(f"{where}: expected NAME=VALUE, got {item!r}")
         try:
             values[key.strip()] = float(val)
         except ValueError:
-            raise SensfwError(f"effect {text!r}: {key.strip()} = {val!r} is not a number") \
-                from None
-    return spec, values
+            raise SensfwError(f"{where}: {key.strip()} = {val!r} is not a number") from None
+    return values
 
 
 @dataclass(frozen=True)
