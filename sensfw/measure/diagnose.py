@@ -229,14 +229,31 @@ def _around(h0: Hypothesis, h: Hypothesis, half: float = 0.25):
     return low, high
 
 
+#: how many of a calibrated candidate's best runs H0 is tried at (see :func:`_refresh_h0`)
+REFRESH_POINTS = 4
+
+
 def _refresh_h0(res: Residuals, h0: Hypothesis, calibrated: Sequence[Hypothesis],
                 opts: dict, log: Log) -> None:
     """Give "parameters only" the same chance as the candidates: each joint calibration
     also moved the base variables, and part of its gain may be base values H0's own
-    search missed. H0 is simulated at every calibrated candidate's base values and, if one
-    is better, refined from there (its evidence holds them)."""
+    search missed. H0 is simulated at the base values of every calibrated candidate's
+    optimum and of its ``REFRESH_POINTS`` best runs (an extra dimension can lead a search
+    around a rough stretch that H0's own search stalls in) and, if one is better, refined
+    from there (its evidence holds them)."""
     names = set(h0.coords.names)
-    points = [{k: v for k, v in h.fit.values.items() if k in names} for h in calibrated]
+    points, seen = [], set()
+    for h in calibrated:  # each candidate's best few points, its effect left out
+        trials = sorted((t for t in h.fit.trials if t.w is not None), key=lambda t: t.chi2)
+        for values in [h.fit.values] + [t.values for t in trials[:REFRESH_POINTS]]:
+            point = {k: float(v) for k, v in values.items() if k in names}
+            key = tuple(sorted(point.items()))
+            if key not in seen:
+                seen.add(key)
+                points.append(point)
+        traded = _traded_away(h, names)
+        if traded is not None:
+            points.append(traded)
     ws = res.evaluate(None, points, "H0 at the candidates' base values")
     best = min((float(w @ w) for w in ws if w is not None), default=math.inf)
     if best >= h0.fit.chi2:
@@ -266,13 +283,40 @@ def _spend_the_rest(res: Residuals, lead: Hypothesis, budget: int, n_levels: int
         lead.fit = fit
 
 
+def _traded_away(h: Hypothesis, names: set[str]) -> dict[str, float] | None:
+    """The base values that, to first order, do what ``h``'s effect does at its optimum:
+    with the Jacobian of its calibration (coded), the base step ``dz_b`` that best cancels
+    the step ``dz_e`` from the effect's values to its neutral ones, ``J_b dz_b ~ -J_e
+    dz_e``. Where the effect trades against base parameters (a correlation near 1), this is
+    where "parameters only" can reach what the candidate reached; None without a
+    Jacobian."""
+    J = h.fit.jacobian
+    if J is None or not np.all(np.isfinite(J)):
+        return None
+    axes = h.coords.names
+    base = [i for i, a in enumerate(axes) if a in names]
+    own = [i for i, a in enumerate(axes) if a not in names]
+    if not base or not own:
+        return None
+    z = h.coords.code(h.fit.values)
+    z_neutral = h.coords.code({**h.fit.values, **h.neutral})
+    dz_e = z_neutral[own] - z[own]
+    dz_b, *_ = np.linalg.lstsq(J[:, base], -J[:, own] @ dz_e, rcond=None)
+    z_new = z.copy()
+    z_new[base] = np.clip(z[base] + dz_b, -1.0, 1.0)
+    values = h.coords.decode(z_new)
+    return {a: float(values[a]) for a in (axes[i] for i in base)}
+
+
 def _rematch_h0(res: Residuals, h0: Hypothesis, lead: Hypothesis, opts: dict,
                 log: Log) -> None:
     """Before a candidate is credited with a gain, "parameters only" gets at least the
-    search the candidate got: a global calibration with as many points as the leader's
-    last one, its surrogate seeded with all of H0's runs (an effect must beat H0's optimum,
-    not the point where H0's first search stopped)."""
-    points = max(lead.fit.n_points, 6 * h0.k + 6)
+    search the candidate got: a global calibration with as many points as the leader ran
+    beyond H0's (its race and its calibrations, in simulations per level), its surrogate
+    seeded with all of H0's runs (an effect must beat H0's optimum, not the point where
+    H0's first search stopped)."""
+    spent = (res.simulations_of(lead.effects) - res.simulations_of(None)) // res.n_levels
+    points = max(lead.fit.n_points, spent, 6 * h0.k + 6)
     old = h0.fit.chi2
     log(f"H0 again before crediting {lead.name} ({points} points, chi2 {old:.4g})")
     fit = calibrate_hypothesis(res, h0, points, log=log, **{**opts, "n_design": 0})

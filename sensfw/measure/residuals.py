@@ -142,6 +142,11 @@ class Residuals:
         comps = self.comparisons(effects, points, label, levels, detail=False)
         return [self.weighted(c, levels) for c in comps]
 
+    def simulations_of(self, effects: EffectSpecs | None = None) -> int:
+        """How many simulations (one per point and level) the model with ``effects`` had,
+        failed ones included."""
+        return sum(len(lv) for lv, _ in self._pool.get(effects_key(effects), []))
+
     def trials(self, effects: EffectSpecs | None = None, levels: Sequence[int] | None = None,
                extra: Mapping[str, float] | None = None) -> list[Trial]:
         """Every successful trial of the model with ``effects`` that covers ``levels``
