@@ -18,7 +18,9 @@ top-down:
 ``budget`` counts simulations (one per point and level) for all of it: about 30 % for H0,
 30 % for the screen (on one level), the rest for the candidates' calibrations; what a phase
 leaves flows to the next. The held-out predictions (one per level and calibrated
-hypothesis) and the model-scatter runs (``2 d``) come on top.
+hypothesis) and the model-scatter runs (``2 d``) come on top, and so does H0's rematch
+before a candidate is credited: at most as many points as the leader spent, so a diagnosis
+ends within twice its budget.
 """
 
 from __future__ import annotations

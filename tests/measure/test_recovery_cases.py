@@ -37,4 +37,6 @@ def test_a_benchmark_case_ends_right(index, recovery):
     row = recovery.run_case(study, case, "dfols", workers=2)
     assert row["outcome"] in ("right", "correct", "correct (cannot tell)"), row
     assert row["noise_reached"], row
-    assert row["simulations"] <= 150 + 50 * len(case["levels"]), row
+    # the default budget, plus H0's rematch before a candidate is credited: at most as many
+    # simulations as the leader spent, itself within the budget (sensfw.measure.diagnose)
+    assert row["simulations"] <= 2 * (150 + 50 * len(case["levels"])), row
