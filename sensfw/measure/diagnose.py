@@ -20,7 +20,7 @@ top-down:
 leaves flows to the next. The held-out predictions (one per level and calibrated
 hypothesis) and the model-scatter runs (``2 d``) come on top, and so does H0's rematch
 before a candidate is credited: at most as many points as the leader spent, so a diagnosis
-ends within twice its budget.
+ends within about twice its budget.
 """
 
 from __future__ import annotations
