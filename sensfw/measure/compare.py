@@ -218,14 +218,8 @@ def prediction_bands(study, measurements, runner, levels, effects=(),
               ellipsoid_points(cal.coords, cal.z, cal.covariance)]
     specs = [variant_spec(study, p, m.drive, effects) for p in points for m in measurements]
     sims, _ = simulate(runner, specs, "prediction band")
-    n = len(measurements)
-    samples = []
-    for j in range(len(points)):
-        row = []
-        for i, m in enumerate(measurements):
-            sig = sims[j * n + i]
-            row.append(None if sig is None else compare_level(
-                m.signals, sig, study.output, levels[i].band, m.level, m.file,
-                error_band=error_band))
-        samples.append(row)
+    sims = iter(sims)  # point-major, as the specs
+    samples = [[None if (sig := next(sims)) is None else compare_level(
+        m.signals, sig, study.output, c.band, m.level, m.file, error_band=error_band)
+        for m, c in zip(measurements, levels, strict=True)] for _ in points]
     return bands(levels, samples, cal.records, [m.kind for m in measurements])

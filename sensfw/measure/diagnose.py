@@ -43,6 +43,9 @@ from .residuals import Residuals
 from .scatter import widen_for_roughness
 from .screening import screen, screening_level
 
+#: how many of a calibrated candidate's best runs H0 is tried at (see :func:`_refresh_h0`)
+REFRESH_POINTS = 4
+
 Log = Callable[[str], None]
 
 
@@ -172,17 +175,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
             calibrated.append(h)
         if calibrated:
-            lead = min(calibrated, key=lambda h: h.bic(n))
-            _spend_the_rest(res, lead, budget, n_levels, opts, log)
-            _refresh_h0(res, h0, calibrated, opts, log)
-            lead = min(calibrated, key=lambda h: h.bic(n))
-            if lead.bic(n) < h0.bic(n) - min_delta_bic:
-                _rematch_h0(res, h0, lead, opts, log)
-            for h in calibrated:  # at its neutral values a candidate is H0
-                if h.fit.chi2 > h0.fit.chi2:
-                    h.fit.best = Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w)
-                    h.notes.append("H0 recalibrated ended better: the effect at its "
-                                   "neutral values")
+            _settle_h0(res, h0, calibrated, budget, min_delta_bic, opts, log)
             lead = min(calibrated, key=lambda h: h.bic(n))
             if lead.bic(n) < h0.bic(n) - min_delta_bic:
                 # the model's scatter where the leader ended: what it gained within that
@@ -231,8 +224,23 @@ def _around(h0: Hypothesis, h: Hypothesis, half: float = 0.25):
     return low, high
 
 
-#: how many of a calibrated candidate's best runs H0 is tried at (see :func:`_refresh_h0`)
-REFRESH_POINTS = 4
+def _settle_h0(res: Residuals, h0: Hypothesis, calibrated: list[Hypothesis], budget: int,
+               margin: float, opts: dict, log: Log) -> None:
+    """Bring the leader and "parameters only" to their optima before they are compared:
+    the leader spends what the budget leaves, H0 is tried at the candidates' base values
+    and, if the leader still beats it by ``margin``, calibrated again with the leader's
+    search; a candidate then worse than H0 stands at its neutral values (where it is H0)."""
+    n = res.entries.size()
+    lead = min(calibrated, key=lambda h: h.bic(n))
+    _spend_the_rest(res, lead, budget, opts, log)
+    _refresh_h0(res, h0, calibrated, opts, log)
+    lead = min(calibrated, key=lambda h: h.bic(n))
+    if lead.bic(n) < h0.bic(n) - margin:
+        _rematch_h0(res, h0, lead, opts, log)
+    for h in calibrated:
+        if h.fit.chi2 > h0.fit.chi2:
+            h.fit.best = Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w)
+            h.notes.append("H0 recalibrated ended better: the effect at its neutral values")
 
 
 def _refresh_h0(res: Residuals, h0: Hypothesis, calibrated: Sequence[Hypothesis],
@@ -269,13 +277,13 @@ def _refresh_h0(res: Residuals, h0: Hypothesis, calibrated: Sequence[Hypothesis]
                     f"{h0.fit.chi2:.4g}")
 
 
-def _spend_the_rest(res: Residuals, lead: Hypothesis, budget: int, n_levels: int,
-                    opts: dict, log: Log) -> None:
+def _spend_the_rest(res: Residuals, lead: Hypothesis, budget: int, opts: dict,
+                    log: Log) -> None:
     """The leader calibrated further (surrogate batches, then DFO-LS, seeded with all its
     runs) with what the budget leaves, unless it already explains the measurement to its
     noise: a verdict compares optima, and a leader short of its own is the weakest link
     (what H0 then gets in its rematch is as much)."""
-    points = (budget - res.n_simulations) // n_levels
+    points = (budget - res.n_simulations) // res.n_levels
     if discrepancy.fits(lead.fit.best.w, lead.k) or points < lead.k + 3:
         return
     log(f"calibrating {lead.name} further with what the budget leaves ({points} points)")

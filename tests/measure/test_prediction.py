@@ -2,11 +2,21 @@
 
 import numpy as np
 import pytest
+import tomlkit
+from scipy.linalg import eigh
 from scipy.stats import chi2
 
 from sensfw.measure.calibration import Coordinates
-from sensfw.measure.prediction import ellipsoid_points, extrapolation
+from sensfw.measure.compare import compare_measurements
+from sensfw.measure.io import write_csv
+from sensfw.measure.prediction import calibration_result, ellipsoid_points, extrapolation
+from sensfw.measure.prepared import load_measurements
+from sensfw.measure.synthetic import Rig, synthesize
+from sensfw.models.analytic import TwoDOF
 from sensfw.params import Parameter
+from sensfw.runs import Runner, RunStore
+from sensfw.study import Study
+from sensfw.study.edit import set_calibration_result
 
 
 def test_the_band_points_lie_on_the_95_percent_ellipsoid():
@@ -44,19 +54,6 @@ def test_a_calibrated_study_predicts_a_band_that_holds_the_resonance(tmp_path):
     whose ends are the first natural frequency at the two ends of k1's 95 % interval
     (+-1.96 sigma on its log axis), within the FRF's line spacing; the measured resonance
     lies inside; a record at a level the calibration did not see is an extrapolation."""
-    import tomlkit
-    from scipy.linalg import eigh
-
-    from sensfw.measure.compare import compare_measurements
-    from sensfw.measure.io import write_csv
-    from sensfw.measure.prediction import calibration_result
-    from sensfw.measure.prepared import load_measurements
-    from sensfw.measure.synthetic import Rig, synthesize
-    from sensfw.models.analytic import TwoDOF
-    from sensfw.runs import Runner, RunStore
-    from sensfw.study import Study
-    from sensfw.study.edit import set_calibration_result
-
     data = {"study": {"name": "rig"}, "model": {"name": "two_dof", "output": "a1"},
             "excitation": {"kind": "log_chirp", "f0": "100 Hz", "f1": "400 Hz",
                            "duration": "1 s", "fs": "2 kHz", "amplitude": "0.1 N",
