@@ -277,6 +277,9 @@ def calibrate(
     out_dir: OutDir = Path("out/calibrate"),
     budget: Annotated[int | None, typer.Option(
         min=1, help="simulations, one per point and level (default 60 per level)")] = None,
+    global_search: Annotated[bool, typer.Option(
+        "--global/--local", help="--local: no space-filling design nor surrogate search, "
+        "only the local least squares from the study's nominal values")] = True,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -292,7 +295,7 @@ def calibrate(
     study = Study.load(study_file)
     meas = load_measurements(study, [str(m) for m in measured])
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
-        result = recalibrate(study, meas, runner, budget=budget,
+        result = recalibrate(study, meas, runner, budget=budget, global_phase=global_search,
                              study_text=study_file.read_text(encoding="utf-8"), log=say)
     write_calibration(out_dir, study, result)
     for c in result["calibration"]:

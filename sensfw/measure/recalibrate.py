@@ -27,10 +27,12 @@ def default_budget(n_levels: int) -> int:
 
 
 def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,
-                budget: int | None = None, local: str = "dfols",
+                budget: int | None = None, local: str = "dfols", global_phase: bool = True,
                 study_text: str | None = None, log=lambda s: None) -> dict:
     """Calibrate the study's base variables alone (module docstring); ``budget`` counts
-    simulations (one per point and level; default 60 points)."""
+    simulations (one per point and level; default 60 points). ``global_phase=False``
+    leaves out the design and the surrogate search: the local least squares from the
+    study's nominal values (a study a calibration already wrote, with a variable added)."""
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
@@ -38,8 +40,9 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     nominal, nominal_cmp = res.nominal()
     log(f"calibrating {', '.join(names)} ({source}), {budget} simulations")
     h0 = Hypothesis(None, "", base)
+    local_only = {} if global_phase else {"global_share": 0.0, "n_design": 0}
     fit = calibrate_hypothesis(res, h0, budget // n_levels, q=workers_of(runner),
-                               local=local, log=log)
+                               local=local, log=log, **local_only)
     rough = widen_for_roughness(res, fit, log)
     (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
     trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":
