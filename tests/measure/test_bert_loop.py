@@ -205,3 +205,50 @@ def test_the_second_round_meets_the_bar_at_every_level(linear, augmented2):
         assert abs(res["model_hz"] - res["measured_hz"]) <= 0.5 + 1e-9, (level, res)
         err, err_lin = (x["frf_error_db"]["rms_in_band"] for x in (c, lin[level]))
         assert err <= 0.5 * err_lin, (level, err, err_lin)
+
+
+#: issue 27: the micro-slip model with Young's modulus free (66-74 GPa: wrought aluminium
+#: 68.9-71.7 GPa, and +-3 % in E for the beams' thickness tolerance), calibrated by
+#: ``sensfw calibrate --local`` from AUGMENTED on the sweeps AND the random records at 0.05,
+#: 0.15 and 0.30 V (342 simulations, 33 minutes on 2 cores; README)
+BOTH_KINDS = {"excitation_gain": 57.04858140035079, "clamp_stiffness": 23300.21638518095,
+              "joint_stiffness": 2540804.3607470314, "damping_ratio": 0.0088244409113156,
+              "microslip_residual": 0.021402542776013188,
+              "microslip_force": 534.5403047856067,
+              "microslip_exponent": -0.894796283239568, "youngs_modulus": 74.0}
+
+
+@pytest.mark.slow
+def test_calibrated_on_both_kinds_the_beam_predicts_the_other_records(bert, cli,
+                                                                      tmp_path):
+    """The six records the BOTH_KINDS calibration did not see (sweeps and random records at
+    0.10, 0.20 and 0.25 V), as the README's table has them: the random records' resonance
+    within 0.4 Hz (measured -0.38, -0.19, -0.19 Hz; every earlier model was 0.7-1.2 Hz
+    off, issue 27) and laser error at most 0.6 dB (0.58, 0.49, 0.47; earlier 1.5-2.3); the
+    sweeps within 0.5 Hz (+0.50, +0.25, +0.31) and 1.1 dB (1.06, 0.44, 0.28). Issue 27's
+    bar (0.3 Hz and 1.0 dB on every record) is not met: the test pins what is."""
+    src = augmented_study(tmp_path, {k: v for k, v in BOTH_KINDS.items()
+                                     if k != "youngs_modulus"})
+    text = src.read_text(encoding="utf-8").replace(
+        "[parameters]\n", '[parameters]\nyoungs_modulus = { nominal = "74 GPa", '
+        'min = "66 GPa", max = "74 GPa" }\n', 1)
+    src.write_text(text, encoding="utf-8")
+    random = bert.parent / "random"
+    args = [a for lv in ("0p10", "0p20", "0p25") for folder in (bert, random)
+            for a in ("-m", folder / f"level_{lv}")]
+    out = tmp_path / "cmp"
+    proc = cli("compare", src, *args, "--out", out, "--error-band", "80,105",
+               "--workers", 2, "--no-progress", timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    levels = json.loads((out / "compare.json").read_text())["levels"]
+    assert len(levels) == 6
+    assert sorted(c["excitation"]["kind"] for c in levels) == ["linear_sweep"] * 3 + \
+        ["random"] * 3
+    for c in levels:
+        res = resonance(c)
+        shift = res["model_hz"] - res["measured_hz"]
+        err = c["frf_error_db"]["rms_in_band"]
+        if c["excitation"]["kind"] == "random":
+            assert abs(shift) <= 0.4 and err <= 0.6, (c["level"], shift, err)
+        else:
+            assert abs(shift) <= 0.5 + 1e-9 and err <= 1.1, (c["level"], shift, err)
