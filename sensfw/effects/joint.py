@@ -12,11 +12,13 @@ series with a Coulomb slider of slip force ``F_i``.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import numpy as np
+from pydantic import Field
 
 from ..errors import SensfwError
+from ..options import Int
 from ..params import MM, Parameter
 from ..plugins import effects
 from .base import Effect, add_spring_along_normal, decade_probes
@@ -43,10 +45,11 @@ class MicroSlip(Effect):
     ``F_i`` between the two beams' points along the tangent (``hooks.add_jenkins``: the
     model integrates the slider's position by return mapping, exact Coulomb friction with
     no regularisation; the elements start stuck at the static state); per point
-    ``elements`` of them with equal springs. Their slip displacements ``phi_i = F_i / k_i``
-    follow a power-law density ``phi^chi`` on ``[0, phi_max]`` (Segalman 2005; ``chi =
-    microslip_exponent``, the elements are its quantiles: ``chi < 0`` puts more of them at
-    small slips, ``chi > 0`` near ``phi_max``), scaled so that all the forces add up to
+    ``elements`` of them (an option, default 3) with equal springs. Their slip
+    displacements ``phi_i = F_i / k_i`` follow a power-law density ``phi^chi`` on ``[0,
+    phi_max]`` (Segalman 2005; ``chi = microslip_exponent``, the elements are its
+    quantiles: ``chi < 0`` puts more of them at small slips, ``chi > 0`` near
+    ``phi_max``), scaled so that all the forces add up to
     ``microslip_force``, the force at which the whole interface slips (friction coefficient
     x bolt preload). Where bending makes the interface slip most, the elements slip first:
     the joint softens from low levels on and more as the load grows, and dissipates
@@ -60,7 +63,21 @@ class MicroSlip(Effect):
     signatures = ("resonances move down as the level rises", "damping grows with level",
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
-    elements: ClassVar[int] = 3  # per interface point
+
+    class Options(Effect.Options):
+        elements: Annotated[Int, Field(ge=1, le=64)] = Field(
+            3, description="Jenkins elements per interface point, an integer in 1-64: "
+                           "quantiles of the slip density (3 resolve its middle; a "
+                           "density whose low-force tail matters, as on records far "
+                           "apart in level, needs more)")
+
+    def __init__(self, attach: str | None = None, elements: int = 3):
+        super().__init__(attach)
+        self.elements = int(elements)
+
+    def spec(self) -> dict:
+        return {**super().spec(), **({} if self.elements == 3 else
+                                     {"elements": self.elements})}
     #: the joint keeps all its stiffness: no elements
     neutral: ClassVar[dict[str, float]] = {"microslip_residual": 1.0}
 

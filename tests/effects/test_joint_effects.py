@@ -315,3 +315,33 @@ def test_dry_friction_at_the_drive_point_sticks_at_low_level_and_slides_at_high(
     low, high = resonance(model, p, 0.005), resonance(model, p, 20.0)
     assert abs(low[0] - stuck) < 0.15, (low, stuck)
     assert abs(high[0] - free) < 0.15, (high, free)
+
+
+@pytest.mark.parametrize("n", [1, 3, 12])
+def test_micro_slip_elements_are_the_slip_densitys_quantiles(n):
+    """``elements`` (an option, default 3) sets how many quantiles of the density
+    ``phi^chi`` the Iwan model has: the springs and forces still add up to the parameters,
+    and the slip displacements are the mid-quantiles ``((i + 1/2) / n)^(1 / (1 + chi))`` of
+    the density on ``[0, phi_max]`` (its CDF is ``(phi / phi_max)^(1 + chi)``), so the
+    smallest slip falls as ``n`` grows (the low-force tail). The option is checked and
+    written back to the spec only when it differs from the default (the runs of the
+    three-element model keep their keys)."""
+    from sensfw.effects.joint import MicroSlip
+    from sensfw.errors import OptionError
+    from sensfw.models.places import make_effect
+
+    chi = -0.5
+    p = {"microslip_residual": 0.2, "microslip_force": 400.0, "microslip_exponent": chi}
+    eff = make_effect({"name": "micro_slip", "elements": n})
+    parts = eff.jenkins(p, 1.25e8)
+    assert len(parts) == n
+    assert sum(k for k, _ in parts) == pytest.approx(1e8)
+    assert sum(f for _, f in parts) == pytest.approx(400.0)
+    slips = np.array([f / k for k, f in parts])
+    q = ((np.arange(n) + 0.5) / n) ** (1 / (1 + chi))
+    assert slips / slips[-1] == pytest.approx(q / q[-1])
+    assert eff.spec() == ({"name": "micro_slip"} if n == 3 else
+                          {"name": "micro_slip", "elements": n})
+    assert MicroSlip().elements == 3
+    with pytest.raises(OptionError, match="elements"):
+        make_effect({"name": "micro_slip", "elements": 0})
