@@ -211,6 +211,38 @@ def test_the_batcher_gathers_the_requests_of_its_clients_into_batches():
     assert answers == {0: [0, 1, 2, 3, 4, 5], 1: [10, 11, 12, 13, 14, 15]}
 
 
+def test_a_batch_runs_in_the_order_of_the_clients_not_of_their_arrival():
+    """Client 1 always asks first, client 0 a moment later: every batch still runs client
+    0's point first (the runs' order is every later trial's order, and so the surrogates'
+    and the calibration's: arrival order made two calibrations of one case differ)."""
+    import time
+
+    batches = []
+
+    def evaluate(zs):
+        batches.append([float(z[0]) for z in zs])
+        return [np.array([float(z[0])]) for z in zs]
+
+    batcher = Batcher(evaluate, 2)
+
+    def client(i):
+        try:
+            for k in range(3):
+                if i == 0:
+                    time.sleep(0.02)
+                batcher(np.array([10 * i + k]), i)
+        finally:
+            batcher.leave()
+
+    threads = [threading.Thread(target=client, args=(i,)) for i in (0, 1)]
+    for th in threads:
+        th.start()
+    batcher.serve()
+    for th in threads:
+        th.join()
+    assert batches == [[0, 10], [1, 11], [2, 12]]
+
+
 def test_chi_square_test_and_bic_on_gaussian_residuals():
     """For standard normal residuals the test rejects about alpha of the time (here over
     2000 draws of 50 entries: 0.1 % expected, at most 0.5 % allowed by the binomial

@@ -26,7 +26,10 @@ EvaluateCoded = Callable[[list[np.ndarray]], list[np.ndarray | None]]
 
 class Batcher:
     """Gathers the one-point requests of ``clients`` solver threads into batches: the
-    serving thread runs a batch once every live client waits for a result."""
+    serving thread runs a batch once every live client waits for a result, in the order of
+    the clients (not of their arrival, which the threads' timing decides: the runs' order
+    is the order of every trial after them, and so of the surrogates fitted to them; in
+    arrival order, two calibrations of the same case could differ)."""
 
     def __init__(self, evaluate: EvaluateCoded, clients: int):
         self.evaluate = evaluate
@@ -34,8 +37,8 @@ class Batcher:
         self.pending: list[tuple[np.ndarray, dict]] = []
         self.alive = clients
 
-    def __call__(self, z: np.ndarray) -> np.ndarray | None:
-        slot: dict = {"done": threading.Event()}
+    def __call__(self, z: np.ndarray, client: int = 0) -> np.ndarray | None:
+        slot: dict = {"done": threading.Event(), "client": client}
         with self.cond:
             self.pending.append((np.array(z, float), slot))
             self.cond.notify_all()
@@ -57,6 +60,7 @@ class Batcher:
                 if not self.pending and self.alive == 0:
                     return
                 batch, self.pending = self.pending, []
+            batch.sort(key=lambda zs: zs[1]["client"])
             try:
                 ws = self.evaluate([z for z, _ in batch])
                 for (_, slot), w in zip(batch, ws, strict=True):
@@ -80,11 +84,11 @@ def dfols_solves(evaluate: EvaluateCoded, starts: Sequence[np.ndarray], budgets:
     batcher = Batcher(evaluate, len(starts))
     out: list[dict] = [{} for _ in starts]
 
-    def objfun(z):
-        w = batcher(z)
-        return failed if w is None else w
-
     def solve(i: int) -> None:
+        def objfun(z):
+            w = batcher(z, i)
+            return failed if w is None else w
+
         try:
             if budgets[i] < len(starts[i]) + 2:
                 out[i] = {"error": "budget below the interpolation set"}
