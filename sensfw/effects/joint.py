@@ -63,6 +63,8 @@ class MicroSlip(Effect):
     signatures = ("resonances move down as the level rises", "damping grows with level",
                   "odd harmonics")
     signature_classes = frozenset({"softening"})
+    #: the joint keeps all its stiffness: no elements
+    neutral: ClassVar[dict[str, float]] = {"microslip_residual": 1.0}
 
     class Options(Effect.Options):
         elements: Annotated[Int, Field(ge=1, le=64)] = Field(
@@ -78,8 +80,6 @@ class MicroSlip(Effect):
     def spec(self) -> dict:
         return {**super().spec(), **({} if self.elements == 3 else
                                      {"elements": self.elements})}
-    #: the joint keeps all its stiffness: no elements
-    neutral: ClassVar[dict[str, float]] = {"microslip_residual": 1.0}
 
     def parameters(self):
         # ranges from the UNESP-BERT beam: two M6 bolts at 5 Nm (~4 kN preload each) with

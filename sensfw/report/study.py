@@ -57,7 +57,7 @@ def frf_overlay(result, stage, channel, top: int = 4):
             ax.semilogx(f[sel], db[sel], ls=ls, lw=0.9, color=colors[i % 10],
                         label=f"{var} {lvl}")
     # frequencies as plain numbers (200, 1000), not 10^k: readable, and no mathtext parser
-    # to build (a third of a second of `sensfw report`)
+    # to build (0.15 s of `sensfw report`)
     ax.xaxis.set_major_formatter(LogFormatter())
     ax.xaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False))
     ax.set_xlabel("frequency (Hz)")
