@@ -182,6 +182,16 @@ def test_the_residual_surrogate_reproduces_a_smooth_residual_vector():
     assert q["loo_rms_per_entry"] < 0.05, q
 
 
+def serve_clients(batcher, client) -> None:
+    """Run ``client(0)`` and ``client(1)`` in threads while this one serves their batches."""
+    threads = [threading.Thread(target=client, args=(i,)) for i in (0, 1)]
+    for th in threads:
+        th.start()
+    batcher.serve()
+    for th in threads:
+        th.join()
+
+
 def test_the_batcher_gathers_the_requests_of_its_clients_into_batches():
     """Two solver threads each ask for six points one at a time: the serving thread runs
     them in six batches of two (a batch waits for every live client)."""
@@ -201,12 +211,7 @@ def test_the_batcher_gathers_the_requests_of_its_clients_into_batches():
         finally:
             batcher.leave()
 
-    threads = [threading.Thread(target=client, args=(i,)) for i in (0, 1)]
-    for th in threads:
-        th.start()
-    batcher.serve()
-    for th in threads:
-        th.join()
+    serve_clients(batcher, client)
     assert batches == [2] * 6
     assert answers == {0: [0, 1, 2, 3, 4, 5], 1: [10, 11, 12, 13, 14, 15]}
 
@@ -234,12 +239,7 @@ def test_a_batch_runs_in_the_order_of_the_clients_not_of_their_arrival():
         finally:
             batcher.leave()
 
-    threads = [threading.Thread(target=client, args=(i,)) for i in (0, 1)]
-    for th in threads:
-        th.start()
-    batcher.serve()
-    for th in threads:
-        th.join()
+    serve_clients(batcher, client)
     assert batches == [[0, 10], [1, 11], [2, 12]]
 
 

@@ -47,6 +47,16 @@ def test_a_record_unlike_the_calibrations_is_an_extrapolation():
     assert extrapolation("random", 5.0, []) is None  # nothing known of the calibration
 
 
+def rig_data() -> dict:
+    """A study of the 2-DOF chain whose [calibration] is k1 (its resonances in closed form)."""
+    return {"study": {"name": "rig"}, "model": {"name": "two_dof", "output": "a1"},
+            "excitation": {"kind": "log_chirp", "f0": "100 Hz", "f1": "400 Hz",
+                           "duration": "1 s", "fs": "2 kHz", "amplitude": "0.1 N",
+                           "tail": "0.5 s"},
+            "stages": [{"name": "s", "design": "oat", "scorers": [{"name": "rms"}]}],
+            "calibration": {"parameters": ["k1"]}}
+
+
 def test_a_calibrated_study_predicts_a_band_that_holds_the_resonance(tmp_path):
     """End to end on the 2-DOF chain (its resonances known in closed form): a study carrying
     ``[calibration.result]`` for k1 (written by :func:`set_calibration_result`, read back by
@@ -54,12 +64,7 @@ def test_a_calibrated_study_predicts_a_band_that_holds_the_resonance(tmp_path):
     whose ends are the first natural frequency at the two ends of k1's 95 % interval
     (+-1.96 sigma on its log axis), within the FRF's line spacing; the measured resonance
     lies inside; a record at a level the calibration did not see is an extrapolation."""
-    data = {"study": {"name": "rig"}, "model": {"name": "two_dof", "output": "a1"},
-            "excitation": {"kind": "log_chirp", "f0": "100 Hz", "f1": "400 Hz",
-                           "duration": "1 s", "fs": "2 kHz", "amplitude": "0.1 N",
-                           "tail": "0.5 s"},
-            "stages": [{"name": "s", "design": "oat", "scorers": [{"name": "rms"}]}],
-            "calibration": {"parameters": ["k1"]}}
+    data = rig_data()
     study = Study.from_dict(data)
     coords = Coordinates.of(None, [study.parameters["k1"]])
     sigma = 0.05  # coded
@@ -103,12 +108,7 @@ def test_a_local_recalibration_starts_from_the_studys_values(tmp_path):
     the global one's design alone would take (2 d + 1 = 3 points plus the search)."""
     from sensfw.measure.recalibrate import recalibrate
 
-    data = {"study": {"name": "rig"}, "model": {"name": "two_dof", "output": "a1"},
-            "excitation": {"kind": "log_chirp", "f0": "100 Hz", "f1": "400 Hz",
-                           "duration": "1 s", "fs": "2 kHz", "amplitude": "0.1 N",
-                           "tail": "0.5 s"},
-            "stages": [{"name": "s", "design": "oat", "scorers": [{"name": "rms"}]}],
-            "calibration": {"parameters": ["k1"]}}
+    data = rig_data()
     truth = Study.from_dict(data)
     sig, info = synthesize(truth, amplitude=0.1, rig=Rig(noise=0.005, seed=3))
     f = write_csv(tmp_path / "m.csv", sig, level=info["amplitude"])
