@@ -16,7 +16,7 @@ from ..runs import Runner
 from ..study import Study
 from ..study.edit import add_effect, set_calibration, set_calibration_result
 from .calibration import Coordinates
-from .diagnose import _around, calibrate_hypothesis, workers_of
+from .diagnose import LOCAL_ONLY, _around, calibrate_hypothesis, workers_of
 from .hypotheses import Hypothesis, calibration_residuals, neutral_values
 from .io import Measurement
 from .scatter import widen_for_roughness
@@ -53,10 +53,9 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         if given:
             res.evaluate(None, [{**nominal, **given}], "base start")
     # from a diagnosis's values: refine only (its global search found them)
-    refine_only = {"global_share": 0.0, "n_design": 0}
     h0.fit = calibrate_hypothesis(res, h0, int(0.35 * budget) // n_levels, q=q,
                                   local=local, log=log,
-                                  **(refine_only if base_start is not None else {}))
+                                  **(LOCAL_ONLY if base_start is not None else {}))
     widen_for_roughness(res, h0.fit, log)
     h = Hypothesis(eff, eff.attach, base + Coordinates.of(None, eff.parameters()))
     added = {**h0.fit.values, **{p.name: p.nominal for p in eff.parameters()}}
@@ -80,7 +79,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
                               f"{res.failures.get(f'probes {h.name}', '?')}")
     left = (budget - res.n_simulations) // n_levels
     log(f"calibrating {h.name} jointly with {', '.join(names)} ({left} points)")
-    design = refine_only if start is not None else {"design_box": _around(h0, h),
+    design = LOCAL_ONLY if start is not None else {"design_box": _around(h0, h),
                                                      "n_design": len(h.own) + 1}
     h.fit = calibrate_hypothesis(res, h, max(left, 2 * h.k + 4), q=q, local=local,
                                  log=log, **design)

@@ -45,6 +45,9 @@ from .screening import screen, screening_level
 
 #: how many of a calibrated candidate's best runs H0 is tried at (see :func:`_refresh_h0`)
 REFRESH_POINTS = 4
+#: :func:`calibrate_hypothesis` options for the local least squares alone (no design, no
+#: surrogate search): from values a global search already found
+LOCAL_ONLY = {"global_share": 0.0, "n_design": 0}
 
 Log = Callable[[str], None]
 
@@ -105,7 +108,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     budget = default_budget(n_levels) if budget is None else int(budget)
     q = workers_of(runner)
     opts = {"q": q, "local": local} if global_phase else \
-        {"q": q, "local": local, "global_share": 0.0, "n_design": 0}
+        {"q": q, "local": local, **LOCAL_ONLY}
     base = Coordinates.of(space)
     _, nominal_cmp = res.nominal("; nothing to compare (see the run store)")
     n = res.entries.size()
@@ -272,7 +275,7 @@ def _refresh_h0(res: Residuals, h0: Hypothesis, calibrated: Sequence[Hypothesis]
         "before refining)")
     old = h0.fit.chi2
     h0.fit = calibrate_hypothesis(res, h0, 6 * h0.k + 6, log=log,
-                                  **{**opts, "global_share": 0.0, "n_design": 0})
+                                  **{**opts, **LOCAL_ONLY})
     h0.notes.append(f"refined again from a candidate's base values: chi2 {old:.4g} -> "
                     f"{h0.fit.chi2:.4g}")
 

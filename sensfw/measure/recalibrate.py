@@ -15,7 +15,7 @@ from ..study.edit import set_calibration, set_calibration_result, set_nominals
 from . import discrepancy
 from .augment import _source_text
 from .calibration import Coordinates
-from .diagnose import calibrate_hypothesis, workers_of
+from .diagnose import LOCAL_ONLY, calibrate_hypothesis, workers_of
 from .hypotheses import Hypothesis, calibration_residuals
 from .io import Measurement
 from .scatter import widen_for_roughness
@@ -40,9 +40,8 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     nominal, nominal_cmp = res.nominal()
     log(f"calibrating {', '.join(names)} ({source}), {budget} simulations")
     h0 = Hypothesis(None, "", base)
-    local_only = {} if global_phase else {"global_share": 0.0, "n_design": 0}
     fit = calibrate_hypothesis(res, h0, budget // n_levels, q=workers_of(runner),
-                               local=local, log=log, **local_only)
+                               local=local, log=log, **({} if global_phase else LOCAL_ONLY))
     rough = widen_for_roughness(res, fit, log)
     (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
     trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":
