@@ -91,17 +91,11 @@ CASES = [
      ["flexible_mode@driveshaft", "flexible_mode@crankshaft", "added_mass@driveshaft"]),
     ("friction@clutch_drive:friction_mu=0.15,friction_velocity=0.5",
      ["friction@clutch_drive", "friction@clutch_crank", "damping@clutch_drive"]),
-    pytest.param(
-        "preload@crankshaft:preload_force=15",
-        ["preload@crankshaft", "preload@driveshaft", "added_mass@crankshaft"],
-        # a known wrong verdict, kept visible (strict: the test fails the day it passes):
-        # with the solver threads' runs in a fixed order the calibration is deterministic
-        # and ends "none" (H0 refreshed to chi2 325.5, preload@driveshaft 320; the true
-        # candidate stalled at 398 on the race's level, started from H0's first, stalled
-        # calibration at 725). In arrival order it passed or not by thread timing. The
-        # candidates' calibrations must restart from a refreshed H0 (issue 25)
-        marks=pytest.mark.xfail(strict=True, reason="the true candidate's calibration "
-                                "stalls (issue 25): verdict 'none'")),
+    # deterministic since the solver threads' runs keep a fixed order; it ended "none"
+    # until the race's candidates were restarted from H0's refreshed optimum (the true one
+    # stalled at chi2 398 on its level from H0's first stall at 725): _restart_race
+    ("preload@crankshaft:preload_force=15",
+     ["preload@crankshaft", "preload@driveshaft", "added_mass@crankshaft"]),
     ("contact_hardening@bearing_l1:hardening_increase=0.8",
      ["contact_hardening@bearing_l1", "contact_hardening@bearing_l3",
       "damping@bearing_l1"]),
@@ -109,8 +103,7 @@ CASES = [
 
 
 @pytest.mark.parametrize("hidden,candidates", CASES,
-                         ids=[(c.values if hasattr(c, "values") else c)[0].split(":")[0]
-                              for c in CASES])
+                         ids=[c[0].split(":")[0] for c in CASES])
 def test_offsets_and_an_effect_name_the_effect_and_its_place(hidden, candidates, study,
                                                              runner, tmp_path):
     meas = measure(study, tmp_path, hidden)
