@@ -50,7 +50,10 @@ class Parameter:
             )
 
     def check(self, value: float, tol: float = 1e-9) -> float:
-        """Return ``value`` as float, or raise naming the parameter if it is out of bounds."""
+        """Return ``value`` as float, or raise naming the parameter if it is out of bounds.
+        A value outside by round-off only (``tol`` of the bounds' magnitude: a coded -1
+        decoded through a group's members, a unit conversion) comes back on its bound, so
+        that it can be written as a nominal value."""
         value = float(value)
         span = max(abs(self.max), abs(self.min), 1e-300) * tol
         if not math.isfinite(value) or value < self.min - span or value > self.max + span:
@@ -58,7 +61,7 @@ class Parameter:
                 f"parameter {self.name!r} = {value:g} {self.unit} is outside its bounds "
                 f"[{self.min:g}, {self.max:g}] {self.unit}"
             )
-        return value
+        return min(max(value, self.min), self.max)
 
 
 class ParameterSet(Mapping[str, Parameter]):
@@ -245,9 +248,7 @@ class DesignSpace:
         for v in self.variables:
             value = float(row[v.name]) if v.name in row else v.nominal
             full.update(v.member_values(value))
-        for name, value in full.items():
-            self.parameters[name].check(value)
-        return full
+        return {name: self.parameters[name].check(value) for name, value in full.items()}
 
     def code(self, frame: pd.DataFrame) -> pd.DataFrame:
         """Physical design table -> coded (-1..1) table."""
