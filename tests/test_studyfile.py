@@ -110,3 +110,18 @@ def test_augment_command_writes_the_users_file_with_the_effect(tmp_path, monkeyp
         params["flex_frequency"])
     assert "augmented with flexible_mode@crankshaft, calibrated against m.csv" in \
         data["study"]["description"]
+
+
+def test_an_effect_is_added_with_its_options():
+    """``add_effect(..., options=...)`` writes the effect's own options into its entry, and
+    the study built from the file passes them to the model (the beam's micro-slip joint
+    with 6 Jenkins elements instead of the default 3)."""
+    from sensfw.study import Study
+
+    text = (ROOT / "studies" / "bert.toml").read_text(encoding="utf-8")
+    out = add_effect(text, "micro_slip", "joint", {}, "", options={"elements": 6})
+    assert all(c in out for c in comment_lines(text))
+    eff = tomllib.loads(out)["model"]["options"]["effects"]
+    assert eff[-1] == {"name": "micro_slip", "attach": "joint", "elements": 6}
+    study = Study.from_dict(tomllib.loads(out), "bert")
+    assert study.model.effects[-1].spec() == eff[-1]

@@ -35,16 +35,19 @@ def _parameter_table(doc, name: str) -> tuple[Any, bool]:
     return entry, False
 
 
-def _effects_entry(name: str, attach: str | None) -> InlineTable:
+def _effects_entry(name: str, attach: str | None,
+                   options: Mapping[str, object] | None = None) -> InlineTable:
     entry = tomlkit.inline_table()
     entry["name"] = name
     if attach:
         entry["attach"] = attach
+    entry.update(dict(options or {}))
     return entry
 
 
 def add_effect(text: str, name: str, attach: str | None,
-               parameters: Mapping[str, Mapping[str, float]], note: str = "") -> str:
+               parameters: Mapping[str, Mapping[str, float]], note: str = "",
+               options: Mapping[str, object] | None = None) -> str:
     """``text`` (a study file) with effect ``name`` at ``attach`` added to the model.
 
     Parameters
@@ -59,6 +62,9 @@ def add_effect(text: str, name: str, attach: str | None,
         others kept).
     note : str
         Appended to ``[study].description``.
+    options : mapping, optional
+        The effect's own options beside ``name`` and ``attach`` (``{"elements": 6}`` for
+        ``micro_slip``), written into its entry as given.
 
     Returns
     -------
@@ -67,18 +73,18 @@ def add_effect(text: str, name: str, attach: str | None,
     """
     doc = tomlkit.parse(text)
     model = _table(doc, "model")
-    options = model.get("options")
-    if options is None:
-        options = model["options"] = tomlkit.inline_table()
-    effects = options.get("effects")
+    model_options = model.get("options")
+    if model_options is None:
+        model_options = model["options"] = tomlkit.inline_table()
+    effects = model_options.get("effects")
     if effects is None:
-        effects = options["effects"] = tomlkit.array()
+        effects = model_options["effects"] = tomlkit.array()
     if isinstance(effects, AoT):  # [[model.options.effects]] tables
         entry = tomlkit.table()
-        entry.update(_effects_entry(name, attach))
+        entry.update(_effects_entry(name, attach, options))
         effects.append(entry)
     elif isinstance(effects, Array):
-        effects.append(_effects_entry(name, attach))
+        effects.append(_effects_entry(name, attach, options))
     else:
         raise TypeError("[model].options.effects must be an array")
     for pname, values in parameters.items():

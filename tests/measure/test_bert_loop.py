@@ -122,15 +122,15 @@ AUGMENTED = {"excitation_gain": 56.44588735429049,
 
 def augmented_study(tmp, values: dict,
                     effects: tuple = (("micro_slip", "joint"),)) -> Path:
-    """studies/bert.toml with ``effects`` and ``values`` as nominal values (what augment
-    writes)."""
+    """studies/bert.toml with ``effects`` (``(name, place)`` or ``(name, place,
+    options)``) and ``values`` as nominal values (what augment writes)."""
     import tomllib
 
     from sensfw.study.edit import add_effect
 
     text = (ROOT / "studies" / "bert.toml").read_text(encoding="utf-8")
-    for name, place in effects:
-        text = add_effect(text, name, place, {})
+    for name, place, *options in effects:
+        text = add_effect(text, name, place, {}, options=options[0] if options else None)
     params = Study.from_dict(tomllib.loads(text), "bert").parameters
     path = tmp / "augmented.toml"
     path.write_text(set_nominals(text, values, {k: (params[k].min, params[k].max)
@@ -207,27 +207,32 @@ def test_the_second_round_meets_the_bar_at_every_level(linear, augmented2):
         assert err <= 0.5 * err_lin, (level, err, err_lin)
 
 
-#: issue 27: the micro-slip model with Young's modulus free (66-74 GPa: wrought aluminium
-#: 68.9-71.7 GPa, and +-3 % in E for the beams' thickness tolerance), calibrated by
-#: ``sensfw calibrate --local`` from AUGMENTED on the sweeps AND the random records at 0.05,
-#: 0.15 and 0.30 V (342 simulations, 33 minutes on 2 cores; README)
-BOTH_KINDS = {"excitation_gain": 57.04858140035079, "clamp_stiffness": 23300.21638518095,
-              "joint_stiffness": 2540804.3607470314, "damping_ratio": 0.0088244409113156,
-              "microslip_residual": 0.021402542776013188,
-              "microslip_force": 534.5403047856067,
-              "microslip_exponent": -0.894796283239568, "youngs_modulus": 74.0}
+#: issue 27: the micro-slip model with 6 Jenkins elements per interface point (3 left no
+#: slip force between the random records' sub-newton forces and the sweeps'; README) and
+#: Young's modulus free (66-74 GPa: wrought aluminium 68.9-71.7 GPa, and +-3 % in E for the
+#: beams' thickness tolerance), calibrated by ``sensfw calibrate --local`` on the sweeps AND
+#: the random records at 0.05, 0.15 and 0.30 V, from the 3-element model's calibration on
+#: the same records (about 260 simulations; README)
+BOTH_KINDS = {"excitation_gain": 57.33308236854197, "clamp_stiffness": 27225.105097665713,
+              "joint_stiffness": 2703287.2870570086, "damping_ratio": 0.00895389779737657,
+              "microslip_residual": 0.016565690959174373,
+              "microslip_force": 531.0191858294602, "microslip_exponent": -0.9,
+              "youngs_modulus": 73.98450390273844}
+SIX_ELEMENTS = (("micro_slip", "joint", {"elements": 6}),)
 
 
 @pytest.mark.slow
 def test_calibrated_on_both_kinds_the_beam_predicts_the_other_records(bert, cli,
                                                                       tmp_path):
     """The six records the BOTH_KINDS calibration did not see (sweeps and random records at
-    0.10, 0.20 and 0.25 V), as the README's table has them: the random records' resonance
-    within 0.4 Hz (measured -0.38, -0.19, -0.19 Hz; every earlier model was 0.7-1.2 Hz
-    off, issue 27) and laser error at most 0.6 dB (0.58, 0.49, 0.47; earlier 1.5-2.3); the
-    sweeps within 0.5 Hz (+0.50, +0.25, +0.31) and 1.1 dB (1.06, 0.44, 0.28). Issue 27's
-    bar (0.3 Hz and 1.0 dB on every record) is not met: the test pins what is."""
-    src = augmented_study(tmp_path, BOTH_KINDS)  # compare only: the bounds do not matter
+    0.10, 0.20 and 0.25 V), as the README's table has them: laser error at most 0.9 dB on
+    every one (0.88, 0.44, 0.31 dB on the sweeps, 0.50, 0.81, 0.82 on the random records;
+    every sweep-fitted model was 1.5-2.3 dB off on the random ones, issue 27); resonance
+    within 0.25 Hz on the random records (-0.13, +0.19, +0.25 Hz; earlier 0.7-1.2) and
+    7/16 Hz on the sweeps (+0.44, +0.25, +0.31). Issue 27's bar (0.3 Hz and 1.0 dB on
+    every record) is not met on the sweeps at 0.10 and 0.25 V: the test pins what is
+    (shifts are whole 1/16 Hz lines of a deterministic simulation)."""
+    src = augmented_study(tmp_path, BOTH_KINDS, SIX_ELEMENTS)
     random = bert.parent / "random"
     args = [a for lv in ("0p10", "0p20", "0p25") for folder in (bert, random)
             for a in ("-m", folder / f"level_{lv}")]
@@ -243,7 +248,6 @@ def test_calibrated_on_both_kinds_the_beam_predicts_the_other_records(bert, cli,
         res = resonance(c)
         shift = res["model_hz"] - res["measured_hz"]
         err = c["frf_error_db"]["rms_in_band"]
-        if c["excitation"]["kind"] == "random":
-            assert abs(shift) <= 0.4 and err <= 0.6, (c["level"], shift, err)
-        else:
-            assert abs(shift) <= 0.5 + 1e-9 and err <= 1.1, (c["level"], shift, err)
+        assert err <= 0.9, (c["excitation"]["kind"], c["level"], err)
+        limit = 0.25 if c["excitation"]["kind"] == "random" else 7 / 16
+        assert abs(shift) <= limit + 1e-9, (c["excitation"]["kind"], c["level"], shift)
