@@ -129,12 +129,12 @@ def augmented_study(text: str, study: Study, result: Mapping, measurements) -> s
     round (diagnose or augment of this study) recalibrates the whole augmented model."""
     name = result["effect"]
     declared = {p.name: p for p in effect_registry.get(name)().parameters()}
-    calibrated = {k: {"min": declared[k].min, "nominal": float(v), "max": declared[k].max}
-                  for k, v in result["params"].items()}
+    calibrated = {k: {"min": declared[k].min, "nominal": declared[k].clip(v),
+                      "max": declared[k].max} for k, v in result["params"].items()}
     for k, v in result.get("base_parameters", {}).items():
         p = study.parameters[k]
         if v != p.nominal:
-            calibrated[k] = {"min": p.min, "nominal": float(v), "max": p.max}
+            calibrated[k] = {"min": p.min, "nominal": p.clip(v), "max": p.max}
     jointly = f" jointly with {', '.join(result['variables'])}" if result.get("variables") \
         else ""
     note = (f"[augmented with {name}@{result['attach']}, calibrated{jointly} against "

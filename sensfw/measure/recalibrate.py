@@ -69,7 +69,8 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
                                "calibrated": res.output_comparisons(cal_cmp)}}
     text = study_text if study_text is not None else _source_text(study)
     if text is not None:
-        values = {k: v for k, v in result["base_parameters"].items()
+        values = {k: study.parameters[k].clip(v)
+                  for k, v in result["base_parameters"].items()
                   if v != study.parameters[k].nominal}
         text = set_nominals(text, values, {k: (study.parameters[k].min,
                                                study.parameters[k].max) for k in values})
