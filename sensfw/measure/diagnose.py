@@ -20,9 +20,11 @@ top-down:
 ``budget`` counts simulations (one per point and level) for all of it: about 30 % for H0,
 30 % for the screen (on one level), the rest for the candidates' calibrations; what a phase
 leaves flows to the next. The held-out predictions (one per level and calibrated
-hypothesis) and the model-scatter runs (``2 d``) come on top, and so does H0's rematch
-before a candidate is credited: at most as many points as the leader spent, so a diagnosis
-ends within about twice its budget.
+hypothesis) and the model-scatter runs (``2 d``) come on top, and so do H0's rematch
+before a candidate is credited (at most as many points as the leader spent) and, after a
+refresh of H0, the race's restart (a start per probe and race optimum of each candidate
+calibrated in the race, ``6 k + 6`` points for each of the best ``final``), so a diagnosis
+ends within about twice its budget (the suite's preload case: 306 simulations for 200).
 """
 
 from __future__ import annotations
@@ -303,7 +305,7 @@ def _restart_race(res: Residuals, h0: Hypothesis, ranked: Sequence[Hypothesis],
     the stall, not by what each explains (``tests/measure/test_diagnose.py``'s preload
     case: the true candidate stalled at chi2 398 on its level from H0's 725, H0 refreshed
     reached 325.5 and no chosen candidate beat that by the margin)."""
-    base = {**h0.fit.values}
+    base = h0.fit.values
     scored = []
     for h in ranked:
         if h in calibrated or "calibrated_point" not in h.screen:
