@@ -7,9 +7,13 @@ three rounds of successive halving.
    ``min |w0 + J dtheta + c d|`` (``d``: the probe's change of the residuals, ``0 <= c <=
    2``): what the effect could explain if it acted as the probe shows. The score is the
    lower of the run's chi2 and that prediction.
-2. **Second look** — the best quarter (at least ``min_second``) at their other probes and
-   at the point the best linearised fit predicts (an effect rarely acts linearly over its
-   range, so several strengths are looked at). Each candidate's residual surrogate
+2. **Second look** — in the order of the first looks, as many candidates as the budget
+   allows beside one calibration on the level (at least ``min_second``), at their other
+   probes and at the point the best linearised fit predicts (an effect rarely acts
+   linearly over its range, so several strengths are looked at: a hardening at 0.8 that
+   explains the record can look like nothing at 0.45, ``bench/recovery.py`` seed 2047,
+   ranked 14th of 44 by its first look). Places whose first looks agree to round-off (the
+   level cannot tell them apart) share one second look. Each candidate's residual surrogate
    (:class:`~sensfw.measure.calibration.ResidualModel`), fitted to its runs and to H0's
    (which are the candidate's runs at its neutral values: shared evidence), gives its
    predicted optimum and lower bound for the report.
@@ -108,6 +112,8 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             lin, dz, c = _linearised(w0, J0, w - w0, z0)
             chi2 = float(w @ w)
             s = h.screen
+            if label == "first look":
+                s["_w"] = w
             s["observed"] = min(s.get("observed", math.inf), chi2)
             if min(chi2, lin) < s.get("score", math.inf):
                 s["score"] = min(chi2, lin)
@@ -125,16 +131,26 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     log(f"  first look (level {level + 1}, H0 chi2 {chi0:.4g}): " + ", ".join(
         f"{h.name} {h.screen['first_look']:.4g}" for h in ranked[:6]))
 
-    # 2. second look: the other probes and the linearised optimum of the best so far
-    n_second = min(max(min_second, len(hyps) // 4), len(hyps))
-    second = []
-    for h in ranked[:n_second]:
+    # 2. second look: the other probes and the linearised optimum, in the order of the
+    # first looks, of as many as the budget allows beside one calibration on the level
+    # (at least ``min_second``); a candidate whose first look is another's of the same
+    # effect (places the level cannot tell apart) shares that one's second look
+    second, looked = [], []
+    for h in ranked:
         if not math.isfinite(h.screen["first_look"]):
+            continue
+        twin = next((o for o in looked if _same_look(o, h)), None)
+        if twin is not None:
+            h.screen.update({k: v for k, v in twin.screen.items() if k != "_start"},
+                            twin=twin.name)
+            h.screen["_start"] = {**twin.screen["_start"]}
             continue
         probes = h.effect.probes(h0_cmp)
         rest = [p for i, p in enumerate(probes) if i != len(probes) // 2]
-        if left() < len(rest) + 1 + reserve:
+        floor = reserve if len(second) < min_second else 6 * (h0.k + 1)
+        if left() < len(rest) + 1 + floor:
             break
+        looked.append(h)
         look(h, rest, "second look")
         if h.screen["score"] < h.screen["observed"]:  # a linearised point: run it
             res.evaluate(h.effects, [h.screen["_start"]], f"second look {h.name}", levels)
@@ -155,6 +171,8 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
                  if i == 0 or h.screen["score"] < chi0_lin - margin]
     for i, h in enumerate(finalists):
         share = left() // (len(finalists) - i)
+        if i == 0:  # the leader's calibration is what the second look kept room for
+            share = min(left(), max(share, 6 * (h0.k + 1)))
         if share < 2 * h.k + 2:
             h.notes.append("not calibrated on the screening level: the budget was spent")
             continue
@@ -165,9 +183,18 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             f"({fit.n_points} points)")
     for h in hyps:
         h.screen.pop("_start", None)
+        h.screen.pop("_w", None)
     return sorted(hyps, key=lambda h: (h.screen.get("calibrated", math.inf),
                                        h.screen.get("score", math.inf),
                                        h.screen["first_look"]))
+
+
+def _same_look(a: Hypothesis, b: Hypothesis) -> bool:
+    """The same effect, and first looks that agree to round-off: the level does not tell
+    the two places apart (the same body, or a connector between the same two)."""
+    wa, wb = a.screen.get("_w"), b.screen.get("_w")
+    return (a.effect.name == b.effect.name and wa is not None and wb is not None
+            and float(np.max(np.abs(wa - wb))) <= 1e-9 * max(float(np.max(np.abs(wa))), 1.0))
 
 
 def _predict(res: Residuals, h: Hypothesis, levels: list[int]) -> None:
