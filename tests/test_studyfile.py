@@ -125,3 +125,60 @@ def test_an_effect_is_added_with_its_options():
     assert eff[-1] == {"name": "micro_slip", "attach": "joint", "elements": 6}
     study = Study.from_dict(tomllib.loads(out), "bert")
     assert study.model.effects[-1].spec() == eff[-1]
+
+
+def test_augment_command_passes_the_effects_options(tmp_path, monkeypatch):
+    """``sensfw augment --option elements=6`` reaches the calibration as an integer and the
+    augmented study's effect entry carries it (the glue; the calibration is stubbed)."""
+    from types import SimpleNamespace
+
+    from typer.testing import CliRunner
+
+    import sensfw.measure.augment
+    import sensfw.measure.prepared
+    import sensfw.report.diagnosis
+    from sensfw.cli import app
+    from sensfw.measure.augment import augmented_study
+
+    monkeypatch.setattr(sensfw.measure.prepared, "load_measurements",
+                        lambda study, files: [SimpleNamespace(file=f) for f in files])
+    seen = {}
+
+    def stub(study, meas, runner, name, attach, study_text=None, options=None, **kw):
+        seen["options"] = options
+        result = {"effect": name, "attach": "joint", "params": {}, "options": options,
+                  "trajectory": [{"step": "calibrated", "error": 1.0}]}
+        return {**result, "study_text": augmented_study(study_text, study, result, meas)}
+
+    monkeypatch.setattr(sensfw.measure.augment, "augment", stub)
+    monkeypatch.setattr(sensfw.report.diagnosis, "write_augment_report", lambda *a, **k: None)
+    study = tmp_path / "beam.toml"
+    study.write_text((ROOT / "studies" / "bert.toml").read_text(encoding="utf-8"),
+                     encoding="utf-8")
+    out = tmp_path / "aug"
+    res = CliRunner().invoke(app, ["augment", str(study), "-m", "m.csv", "--effect",
+                                   "micro_slip@joint", "--option", "elements=6", "--out",
+                                   str(out), "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert seen["options"] == {"elements": 6}
+    eff = tomllib.loads((out / "study.toml").read_text(encoding="utf-8"))
+    assert eff["model"]["options"]["effects"][-1] == {"name": "micro_slip",
+                                                      "attach": "joint", "elements": 6}
+    bad = CliRunner().invoke(app, ["augment", str(study), "-m", "m.csv", "--effect",
+                                   "micro_slip@joint", "--option", "elements", "--out",
+                                   str(out), "--no-progress"])
+    assert bad.exit_code != 0 and "KEY=VALUE" in bad.output
+
+
+def test_augment_rejects_an_effect_option_out_of_range_before_any_run():
+    """An effect option the effect's declaration rejects (micro_slip's elements: 1-64) is
+    an error naming the option, raised before the calibration's first simulation."""
+    from sensfw.errors import SensfwError
+    from sensfw.measure.augment import augment
+    from sensfw.study import Study
+
+    study = Study.load(ROOT / "studies" / "bert.toml")
+    with pytest.raises(SensfwError, match="elements"):
+        augment(study, [], None, "micro_slip", "joint", options={"elements": 0})
+    with pytest.raises(SensfwError, match="unknown option"):
+        augment(study, [], None, "micro_slip", "joint", options={"element": 6})

@@ -222,11 +222,31 @@ def diagnose(
     out.print(f"-> {out_dir}/diagnose.json, {out_dir}/report.html")
 
 
+def effect_options(items: list[str]) -> dict[str, object]:
+    """``KEY=VALUE`` strings as options, each value read as TOML (``6`` an integer,
+    ``0.5`` a float, ``true`` a boolean) or else kept as the string."""
+    import tomllib
+
+    out: dict[str, object] = {}
+    for item in items:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            raise SensfwError(f"--option {item!r}: expected KEY=VALUE, e.g. elements=6")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value.strip()
+    return out
+
+
 @command()
 def augment(
     study_file: StudyFile,
     measured: Measured,
     effect: Annotated[str, typer.Option(help="effect to add, NAME[@PLACE]")],
+    option: Annotated[list[str] | None, typer.Option(
+        "--option", help="an option of the effect, KEY=VALUE (repeatable), e.g. "
+                         "elements=6 for micro_slip")] = None,
     out_dir: OutDir = Path("out/augment"),
     start_from: Annotated[Path | None, typer.Option(
         help="diagnose.json: start from the values diagnose found for this effect")] = None,
@@ -258,6 +278,7 @@ def augment(
                   read_also=read_also) as runner:
         result = run_augment(study, meas, runner, name, attach or None, start=start,
                              base_start=base_start, budget=budget,
+                             options=effect_options(option or []),
                              study_text=study_file.read_text(encoding="utf-8"), log=say)
     write_augmentation(out_dir, study, result)
     for t in result["trajectory"]:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import SensfwError
 from ..evaluate import model_with_effects
+from ..options import option_problems
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
@@ -31,14 +32,21 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
             attach: str | None = None, start: Mapping[str, float] | None = None,
             base_start: Mapping[str, float] | None = None, budget: int | None = None,
             local: str = "dfols", study_text: str | None = None,
-            log=lambda s: None) -> dict:
+            options: Mapping[str, object] | None = None, log=lambda s: None) -> dict:
     """Calibrate ``effect`` at ``attach`` (default: its preferred place) jointly with the
     study's calibration variables. ``start`` (e.g. the values :func:`diagnose` found: base
     variables and effect parameters) and ``base_start`` (diagnose's "parameters only"
     values) are simulated first and seed the calibrations. ``study_text`` (default: the
     study's file) is the text the augmented study is written from (comments and layout
-    kept); the result's ``"study_text"`` is the augmented study."""
-    eff = effect_registry.get(effect)(attach=attach)
+    kept); the result's ``"study_text"`` is the augmented study. ``options`` are the
+    effect's own options (``{"elements": 6}`` for ``micro_slip``), checked against its
+    declaration and written into the augmented study's effect entry."""
+    cls = effect_registry.get(effect)
+    options = dict(options or {})
+    problems = option_problems(cls, {"attach": attach, **options})
+    if problems:
+        raise SensfwError(f"effect {effect}: " + "; ".join(m for _, m in problems))
+    eff = cls(attach=attach, **options)
     model_with_effects(study, [eff])  # resolves (and checks) where it attaches
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
@@ -97,6 +105,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
                            "params": dict(values)})
     own = set(h.own)
     result = {"effect": effect, "attach": eff.attach, "variables": names,
+              "options": {k: v for k, v in eff.spec().items() if k not in ("name", "attach")},
               "channels": res.channels, "variables_from": source,
               "params": {k: v for k, v in h.fit.values.items() if k in own},
               "base": {k: v for k, v in h.fit.values.items() if k not in own},
@@ -139,7 +148,8 @@ def augmented_study(text: str, study: Study, result: Mapping, measurements) -> s
         else ""
     note = (f"[augmented with {name}@{result['attach']}, calibrated{jointly} against "
             f"{', '.join(m.file for m in measurements)}]")
-    text = add_effect(text, name, result["attach"], calibrated, note)
+    text = add_effect(text, name, result["attach"], calibrated, note,
+                      options=result.get("options") or None)
     if result.get("variables"):
         text = set_calibration(text, [*result["variables"],
                                       *(k for k in result["params"]
