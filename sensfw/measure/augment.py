@@ -20,6 +20,7 @@ from .calibration import Coordinates
 from .diagnose import LOCAL_ONLY, _around, calibrate_hypothesis, workers_of
 from .hypotheses import Hypothesis, calibration_residuals, neutral_values
 from .io import Measurement
+from .prediction import fitted_records
 from .scatter import widen_for_roughness
 
 
@@ -112,7 +113,8 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
               "base_parameters": space.to_parameters(
                   {k: v for k, v in h.fit.values.items() if k in names}),
               "calibration": h.fit.summary(), "trades": h.fit.trades(),
-              "uncertainty": h.fit.uncertainty(res.records()),
+              "uncertainty": h.fit.uncertainty(
+                  fitted_records(res.records(), comps["jointly calibrated"])),
               "surrogate": h.fit.info.get("surrogate"), "chi2": h.fit.chi2,
               "notes": h.notes, "trajectory": trajectory,
               "n_simulations": res.n_simulations, "budget": budget,

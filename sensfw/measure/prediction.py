@@ -14,6 +14,16 @@ calibration's uncertainty: the model form is missing something, or the calibrati
 confident. ``2 d`` runs per record, whatever the model's cost (no surrogate is needed for
 so few).
 
+The parameters' uncertainty is not the model's: a model form that misses something misfits
+even the records it was fitted to. Where the calibration stored its misfit on each record it
+fitted (:func:`fitted_records`: the resonance shift, model minus measured, and the FRF
+error), the band is widened on both sides by ``FORM_Z`` times the RMS of those misfits (of
+the records of the same kind when the calibration fitted two or more, else of all): the
+residual term of a regression's prediction interval (e.g. Montgomery, *Design and Analysis of
+Experiments*, Sect. 10.6), with the fitted records' misfit as the residual (it tends to be
+smaller than the misfit on records not fitted, so the term is a lower bound of the model
+form's error). The report states both parts.
+
 A record is an **extrapolation** when its kind of excitation is none the calibration saw,
 or its level lies outside the levels of that kind the calibration saw (beyond 10 %).
 """
@@ -27,6 +37,9 @@ import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
 from .calibration import Axis, Coordinates
+
+#: two-sided 95 % normal quantile: the model-form term's multiple of the fitted misfit's RMS
+FORM_Z = 1.96
 
 
 @dataclass
@@ -97,6 +110,11 @@ class Band:
     resonance_high: float | None
     resonance_measured: float | None
     extrapolation: str | None = None
+    #: RMS of the fitted records' resonance shift (Hz) and FRF error (dB) the band was
+    #: widened by (times ``FORM_Z``), and how many fitted records they come from
+    form_hz: float = 0.0
+    form_db: float = 0.0
+    form_records: int = 0
 
     @property
     def contains_resonance(self) -> bool | None:
@@ -126,6 +144,8 @@ class Band:
                 "contains_resonance": self.contains_resonance,
                 "resonance_width_hz": self.resonance_width_hz,
                 "width_db_at_resonance": self.width_db_at_resonance,
+                "model_form_hz": self.form_hz, "model_form_db": self.form_db,
+                "model_form_records": self.form_records, "model_form_z": FORM_Z,
                 "extrapolation": self.extrapolation}
 
 
@@ -143,22 +163,57 @@ def main_resonance(resonances: Sequence[Mapping], band: tuple[float, float] | No
     return r["measured_hz"], r["model_hz"]
 
 
+def fitted_records(records: Sequence[Mapping], comparisons: Sequence | None
+                   ) -> list[dict]:
+    """``records`` (file, kind, level of each fitted record) with the calibrated model's
+    misfit on each, from its comparison: ``resonance_shift_hz`` (model minus measured
+    resonance, :func:`main_resonance`; None without one) and ``error_db``."""
+    out = []
+    for r, c in zip(records, comparisons or [None] * len(records), strict=True):
+        if c is None:
+            out.append(dict(r))
+            continue
+        meas, model = main_resonance(c.resonances, c.error_band)
+        out.append({**r, "resonance_shift_hz": None if meas is None or model is None
+                    else float(model - meas), "error_db": float(c.error_db)})
+    return out
+
+
+def model_form(seen: Sequence[Mapping], kind: str) -> tuple[float, float, int]:
+    """RMS of the fitted records' resonance shifts (Hz) and FRF errors (dB), of those of
+    ``kind`` where the calibration fitted two or more, else of all; and how many records.
+    Zeros where the calibration stored no misfits (a study written before it did)."""
+    def rms(rows, key):
+        x = [float(r[key]) for r in rows if r.get(key) is not None]
+        return (float(np.sqrt(np.mean(np.square(x)))), len(x)) if x else (0.0, 0)
+
+    same = [r for r in seen if r.get("kind") == kind]
+    rows = same if sum(r.get("resonance_shift_hz") is not None for r in same) >= 2 else seen
+    hz, n = rms(rows, "resonance_shift_hz")
+    db, _ = rms(rows, "error_db")
+    return hz, db, n
+
+
 def bands(levels: Sequence, samples: Sequence[Sequence], seen: Sequence[Mapping],
           kinds: Sequence[str]) -> list[Band]:
     """The band of each record from its comparison with the calibrated model (``levels``)
     and with the model at each ellipsoid point (``samples[j][i]``: point ``j``, record
-    ``i``; :class:`~sensfw.measure.comparison.LevelComparison`)."""
+    ``i``; :class:`~sensfw.measure.comparison.LevelComparison`), widened by the model-form
+    term of the records the calibration fitted (``seen``; module docstring)."""
     out = []
     for i, c in enumerate(levels):
         runs = [c] + [s[i] for s in samples if s[i] is not None]
-        lo = np.min([r.db_model for r in runs], axis=0)
-        hi = np.max([r.db_model for r in runs], axis=0)
+        form_hz, form_db, n_form = model_form(seen, kinds[i])
+        lo = np.min([r.db_model for r in runs], axis=0) - FORM_Z * form_db
+        hi = np.max([r.db_model for r in runs], axis=0) + FORM_Z * form_db
         meas, _ = main_resonance(c.resonances, c.error_band)
         models = [main_resonance(r.resonances, c.error_band)[1] for r in runs]
         models = [m for m in models if m is not None]
         out.append(Band(file=c.file, kind=kinds[i], level=c.level, f=c.f, db_low=lo,
-                        db_high=hi, resonance_low=min(models) if models else None,
-                        resonance_high=max(models) if models else None,
+                        db_high=hi,
+                        resonance_low=min(models) - FORM_Z * form_hz if models else None,
+                        resonance_high=max(models) + FORM_Z * form_hz if models else None,
                         resonance_measured=meas,
-                        extrapolation=extrapolation(kinds[i], c.level, seen)))
+                        extrapolation=extrapolation(kinds[i], c.level, seen),
+                        form_hz=form_hz, form_db=form_db, form_records=n_form))
     return out

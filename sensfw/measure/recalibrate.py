@@ -18,6 +18,7 @@ from .calibration import Coordinates
 from .diagnose import LOCAL_ONLY, calibrate_hypothesis, workers_of
 from .hypotheses import Hypothesis, calibration_residuals
 from .io import Measurement
+from .prediction import fitted_records
 from .scatter import widen_for_roughness
 
 
@@ -53,7 +54,8 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     result = {"variables": names, "variables_from": source, "channels": res.channels,
               "params": fit.values, "base_parameters": space.to_parameters(fit.values),
               "calibration": fit.summary(), "trades": fit.trades(),
-              "uncertainty": fit.uncertainty(res.records()),
+              "uncertainty": fit.uncertainty(
+                  fitted_records(res.records(), res.output_comparisons(cal_cmp))),
               "surrogate": fit.info.get("surrogate"), "chi2": fit.chi2,
               "n_entries": res.entries.size(),
               "fits_noise": discrepancy.fits(fit.best.w, len(base)),

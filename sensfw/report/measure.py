@@ -8,6 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ..measure.prediction import FORM_Z
 from .html import Page
 from .measure_figures import (
     amplitude_plot,
@@ -136,19 +137,30 @@ def _band_frame(bands) -> pd.DataFrame:
             "inside": "" if inside is None else ("yes" if inside else "NO"),
             "band width at resonance": "" if b.width_db_at_resonance is None else
             f"{b.resonance_width_hz:.2f} Hz, {b.width_db_at_resonance:.2f} dB",
+            "of it, model form (±)": "" if not b.form_records else
+            f"{FORM_Z * b.form_hz:.2f} Hz, {FORM_Z * b.form_db:.2f} dB",
             "extrapolation": b.extrapolation or ""})
-    return pd.DataFrame(rows)
+    frame = pd.DataFrame(rows)
+    if not any(b.form_records for b in bands):
+        frame = frame.drop(columns="of it, model form (±)")
+    return frame
 
 
 def prediction_section(page, comparisons, bands, error_band=None) -> None:
     """The prediction band of a calibrated study's model on each record."""
     page.h2("Prediction with the calibration's uncertainty")
     outside = [b for b in bands if b.contains_resonance is False]
+    form = next((b for b in bands if b.form_records), None)
     page.p("The band spans the calibrated model at the points where the calibration's 95 % "
            "ellipsoid (its Laplace covariance) meets its principal axes: on each line the "
-           "lowest and highest model FRF, and the lowest and highest resonance. A measured "
-           "resonance outside it is not predicted within the calibration's uncertainty. "
-           "A record of a kind or at a level the calibration did not see is an "
+           "lowest and highest model FRF, and the lowest and highest resonance"
+           + (f"; both widened on each side by {FORM_Z} times the RMS misfit of the "
+              "calibrated model on the records it was fitted to (of the same kind where it "
+              "fitted two or more; the model form's part, a lower bound of it)" if form
+              else "; the calibration stored no misfit on its records, so the band holds "
+              "the parameters' uncertainty only, not the model form's")
+           + ". A measured resonance outside it is not predicted within the calibration's "
+           "uncertainty. A record of a kind or at a level the calibration did not see is an "
            "extrapolation.", "note" if outside else "ok")
     page.table(_band_frame(bands), index=False)
     page.figure(band_plot(comparisons, bands, error_band),

@@ -9,7 +9,15 @@ from scipy.stats import chi2
 from sensfw.measure.calibration import Coordinates
 from sensfw.measure.compare import compare_measurements
 from sensfw.measure.io import write_csv
-from sensfw.measure.prediction import calibration_result, ellipsoid_points, extrapolation
+from sensfw.measure.prediction import (
+    FORM_Z,
+    bands,
+    calibration_result,
+    ellipsoid_points,
+    extrapolation,
+    fitted_records,
+    model_form,
+)
 from sensfw.measure.prepared import load_measurements
 from sensfw.measure.synthetic import Rig, synthesize
 from sensfw.models.analytic import TwoDOF
@@ -125,3 +133,58 @@ def test_a_local_recalibration_starts_from_the_studys_values(tmp_path):
     assert k1["interval"][0] <= 4000.0 <= k1["interval"][1]
     assert k1["value"] == pytest.approx(4000.0, rel=0.01)
     assert out["n_simulations"] <= 12 + 1  # the budget and the nominal run
+    # the calibrated study keeps the model's misfit on the record it was fitted to: the
+    # resonance shift of the calibrated comparison (model minus measured) and its error
+    (cal,) = out["_comparisons"]["calibrated"]
+    r = next(r for r in cal.resonances if r["measured_hz"] and r["model_hz"])
+    (rec,) = out["uncertainty"]["records"]
+    assert rec["resonance_shift_hz"] == pytest.approx(r["model_hz"] - r["measured_hz"])
+    assert rec["error_db"] == pytest.approx(cal.error_db)
+
+
+def _comparison(f, db, measured_hz, model_hz, error_db=0.5):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(file="r", level=0.1, f=f, db_model=db, error_band=None,
+                           error_db=error_db, resonances=[{"measured_hz": measured_hz,
+                                                           "model_hz": model_hz}])
+
+
+def test_the_model_form_term_is_the_fitted_records_rms_misfit():
+    """The band's model-form part: the RMS of the fitted records' resonance shifts and FRF
+    errors, of the records of the same kind where two or more were fitted, else of all;
+    nothing where the calibration stored no misfit (a study written before it did)."""
+    seen = [{"kind": "sweep", "level": 0.1, "resonance_shift_hz": 0.1, "error_db": 0.3},
+            {"kind": "sweep", "level": 0.2, "resonance_shift_hz": -0.2, "error_db": 0.4},
+            {"kind": "sweep", "level": 0.3, "resonance_shift_hz": 0.2, "error_db": 0.5},
+            {"kind": "random", "level": 0.1, "resonance_shift_hz": 0.05, "error_db": 1.0},
+            {"kind": "random", "level": 0.2, "resonance_shift_hz": -0.05, "error_db": 1.0}]
+    assert model_form(seen, "sweep") == pytest.approx((np.sqrt(0.09 / 3), np.sqrt(0.5 / 3),
+                                                       3))
+    assert model_form(seen, "random") == pytest.approx((0.05, 1.0, 2))
+    hz, db, n = model_form(seen, "stepped_sine")  # none of its kind: all five
+    assert n == 5 and hz == pytest.approx(np.sqrt((0.09 + 0.005) / 5))
+    assert db == pytest.approx(np.sqrt((0.09 + 0.16 + 0.25 + 2.0) / 5))
+    assert model_form([{"kind": "sweep", "level": 0.1}], "sweep") == (0.0, 0.0, 0)
+    # the band: the envelope of the runs, widened by FORM_Z times the term on each side
+    f = np.linspace(90.0, 100.0, 11)
+    c = _comparison(f, np.zeros(11), 95.0, 95.2)
+    sample = _comparison(f, np.ones(11), 95.0, 95.4)
+    (b,) = bands([c], [[sample]], seen, ["random"])
+    assert b.resonance_low == pytest.approx(95.2 - FORM_Z * 0.05)
+    assert b.resonance_high == pytest.approx(95.4 + FORM_Z * 0.05)
+    assert b.db_low == pytest.approx(np.full(11, -FORM_Z * 1.0))
+    assert b.db_high == pytest.approx(np.full(11, 1.0 + FORM_Z * 1.0))
+    assert b.contains_resonance is False  # 95.0 < 95.2 - 0.098
+    (b,) = bands([c], [[sample]], seen, ["sweep"])  # sweep's term 0.173 Hz reaches 95.0
+    assert b.contains_resonance and b.form_records == 3
+
+
+def test_fitted_records_carry_each_records_misfit():
+    f = np.linspace(90.0, 100.0, 11)
+    recs = fitted_records([{"file": "a", "kind": "sweep", "level": 0.1}],
+                          [_comparison(f, np.zeros(11), 95.0, 94.75, error_db=0.7)])
+    assert recs == [{"file": "a", "kind": "sweep", "level": 0.1,
+                     "resonance_shift_hz": pytest.approx(-0.25), "error_db": 0.7}]
+    assert fitted_records([{"kind": "sweep", "level": 0.1}], None) == [
+        {"kind": "sweep", "level": 0.1}]

@@ -96,14 +96,18 @@ class Fit:
     def uncertainty(self, records: list[dict] | None = None) -> dict | None:
         """What the calibration found, for the calibrated study (``[calibration.result]``,
         :mod:`sensfw.measure.prediction`): the axes, their coding, the calibrated point and
-        its covariance (coded), and the ``records`` it saw; None without a covariance."""
+        its covariance (coded), and the ``records`` it saw (with the calibrated model's
+        misfit on each, where given: :func:`sensfw.measure.prediction.fitted_records`); None
+        without a covariance."""
         cov = self.covariance()
         if cov is None:
             return None
         return {"parameters": self.coords.names,
                 "scales": [a.scale for a in self.coords.axes],
                 "coded": [float(x) for x in self.z], "covariance": cov.tolist(),
-                "records": [{"kind": r["kind"], "level": float(r["level"])}
+                "records": [{"kind": r["kind"], "level": float(r["level"]),
+                             **{k: float(r[k]) for k in ("resonance_shift_hz", "error_db")
+                                if r.get(k) is not None and math.isfinite(r[k])}}
                             for r in records or []]}
 
     def summary(self) -> list[dict]:
