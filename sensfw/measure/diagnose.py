@@ -185,6 +185,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             _settle_h0(res, h0, calibrated, budget, min_delta_bic, opts, log,
                        restart=lambda: _restart_race(res, h0, ranked, calibrated, final,
                                                      h0_cmp, opts, log))
+            _join_twins(res, hyps, calibrated, log)
             lead = min(calibrated, key=lambda h: h.bic(n))
             if lead.bic(n) < h0.bic(n) - min_delta_bic:
                 # the model's scatter where the leader ended: what it gained within that
@@ -325,6 +326,30 @@ def _restart_race(res: Residuals, h0: Hypothesis, ranked: Sequence[Hypothesis],
                        "from a stalled H0")
         log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
         calibrated.append(h)
+
+
+def _join_twins(res: Residuals, hyps: Sequence[Hypothesis], calibrated: list[Hypothesis],
+                log: Log) -> None:
+    """The candidates whose first look was a calibrated one's to round-off (the same effect
+    at a place the screening level could not tell apart: they shared its second look,
+    :func:`sensfw.measure.screening.screen`) are run at its optimum at every level; one
+    that ends within the tie of it joins the calibrated (the verdict then names both:
+    the channels cannot tell the places apart), one that ends worse stays out."""
+    for h in list(calibrated):
+        for t in hyps:
+            if t.screen.get("twin") != h.name or t in calibrated:
+                continue
+            (w,) = res.evaluate(t.effects, [h.fit.values], f"{t.name} at {h.name}'s optimum")
+            if w is None:
+                continue
+            chi2 = float(w @ w)
+            log(f"  {t.name} (its first look was {h.name}'s) at {h.name}'s optimum: chi2 "
+                f"{chi2:.4g} against {h.fit.chi2:.4g}")
+            if chi2 - h.fit.chi2 <= TIE_BIC:
+                t.fit = Fit(t.coords, Trial(dict(h.fit.values), w), None)
+                t.notes.append(f"its first look was {h.name}'s to round-off; at that one's "
+                               f"optimum chi2 {chi2:.4g} ({h.fit.chi2:.4g})")
+                calibrated.append(t)
 
 
 def _spend_the_rest(res: Residuals, lead: Hypothesis, budget: int, opts: dict,
