@@ -14,7 +14,8 @@ top-down:
    values); then the most promising candidates globally at every level, again seeded with
    H0's runs; H0 is tried again from every calibrated candidate's base values and, if
    that moves its optimum by more than the margin, the race's other calibrated candidates
-   start again from there;
+   start again from there; places whose first looks were a calibrated candidate's to
+   round-off are run at its optimum and join it where they tie (:func:`_join_twins`);
 3. **ranking** (:mod:`.ranking`): BIC, held-out levels, ties and trades, the verdict.
 
 ``budget`` counts simulations (one per point and level) for all of it: about 30 % for H0,
