@@ -134,6 +134,15 @@ def summary(rows: list[dict]) -> None:
 
         print(f"  true hypothesis within the noise: {rate(rs, lambda r: r['noise_reached'])}"
               " (bar >= 95 %)")
+        # where even the true values miss the noise (the model's own scatter), the noise
+        # is out of reach: did the calibration get as low as the truth (within 3 sd of a
+        # chi-square's spread) or to the noise?
+        def as_low(r):
+            return r["noise_reached"] or r["chi2_true_calibrated"] <= \
+                r["chi2_truth"] + 3 * math.sqrt(2 * r["n_entries"])
+
+        print("  true hypothesis calibrated to the noise or to its true values' chi2: "
+              f"{rate(rs, as_low)}")
         print(f"  data can tell -> effect and place named: "
               f"{rate(tell, lambda r: r['outcome'] == 'right')} (bar >= 90 %)")
         print(f"  data cannot tell -> parameters/none: "
