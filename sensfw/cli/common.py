@@ -129,6 +129,15 @@ def _running(study, out_dir: Path, workers, backend, scheduler, progress, read_a
         runner.close()
 
 
+def option_value(text: str) -> object:
+    """A command-line option's value: JSON where it parses (``6`` an integer, ``0.5`` a
+    float, ``true`` a boolean), else the string itself."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
 def _json(path: Path, data) -> None:
     from ..results import jsonable
 

@@ -19,6 +19,7 @@ from .common import (
     Workers,
     _running,
     command,
+    option_value,
     out,
     say,
 )
@@ -223,19 +224,13 @@ def diagnose(
 
 
 def effect_options(items: list[str]) -> dict[str, object]:
-    """``KEY=VALUE`` strings as options, each value read as TOML (``6`` an integer,
-    ``0.5`` a float, ``true`` a boolean) or else kept as the string."""
-    import tomllib
-
+    """``KEY=VALUE`` strings as options (values read by :func:`option_value`)."""
     out: dict[str, object] = {}
     for item in items:
         key, eq, value = item.partition("=")
         if not eq or not key.strip():
             raise SensfwError(f"--option {item!r}: expected KEY=VALUE, e.g. elements=6")
-        try:
-            out[key.strip()] = tomllib.loads(f"v = {value.strip()}")["v"]
-        except tomllib.TOMLDecodeError:
-            out[key.strip()] = value.strip()
+        out[key.strip()] = option_value(value.strip())
     return out
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Annotated
@@ -22,6 +21,7 @@ from .common import (
     _runner,
     _running,
     command,
+    option_value,
     out,
     say,
 )
@@ -121,11 +121,7 @@ def compare_designs_cmd(
         dname, dot, oname = key.partition(".")
         if not (sep and dot):
             raise SensfwError(f"--option {item!r}: expected DESIGN.KEY=VALUE")
-        try:
-            value = json.loads(val)
-        except json.JSONDecodeError:
-            value = val
-        opts.setdefault(dname, {})[oname] = value
+        opts.setdefault(dname, {})[oname] = option_value(val)
     build_comparison(study, names, opts, reference_runs, reference_surrogate)  # before any run
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = compare_designs(study, runner, names, opts, reference_runs,

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from ..errors import SensfwError
 from ..evaluate import model_with_effects
-from ..options import option_problems
+from ..options import build, describe
 from ..plugins import effects as effect_registry
 from ..runs import Runner
 from ..study import Study
@@ -42,12 +42,9 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     kept); the result's ``"study_text"`` is the augmented study. ``options`` are the
     effect's own options (``{"elements": 6}`` for ``micro_slip``), checked against its
     declaration and written into the augmented study's effect entry."""
-    cls = effect_registry.get(effect)
-    options = dict(options or {})
-    problems = option_problems(cls, {"attach": attach, **options})
+    eff, problems = build(effect_registry.get(effect), {"attach": attach, **(options or {})})
     if problems:
-        raise SensfwError(f"effect {effect}: " + "; ".join(m for _, m in problems))
-    eff = cls(attach=attach, **options)
+        raise SensfwError(f"effect {effect}: {describe(problems)}")
     model_with_effects(study, [eff])  # resolves (and checks) where it attaches
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels

@@ -141,9 +141,8 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             continue
         twin = next((o for o in looked if _same_look(o, h)), None)
         if twin is not None:
-            h.screen.update({k: v for k, v in twin.screen.items() if k != "_start"},
-                            twin=twin.name)
-            h.screen["_start"] = {**twin.screen["_start"]}
+            h.screen.update(twin.screen, twin=twin.name,
+                            _start=dict(twin.screen["_start"]))
             continue
         probes = h.effect.probes(h0_cmp)
         rest = [p for i, p in enumerate(probes) if i != len(probes) // 2]
