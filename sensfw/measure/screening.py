@@ -77,9 +77,13 @@ def _scaled_probe(h: Hypothesis, probe: dict, c: float) -> dict:
 
 def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, level: int,
            calibrate_on: CalibrateOn, budget: int, keep: int = 3, min_second: int = 4,
-           margin: float = 10.0, log: Log = lambda s: None) -> list[Hypothesis]:
+           margin: float = 10.0, first_only: bool = False, log: Log = lambda s: None
+           ) -> list[Hypothesis]:
     """Race ``hyps`` on ``level`` with about ``budget`` simulations (module docstring);
-    fills each ``h.screen`` and returns them ranked, most promising first. ``keep``
+    fills each ``h.screen`` and returns them ranked, most promising first. With
+    ``first_only`` (H0 already passes the noise's chi-square test) the race stops after
+    the first look unless a candidate's look gains ``margin`` over what the base
+    parameters alone reach on the level. ``keep``
     candidates at most are calibrated on the level, with what the looks leave (at least
     ``6 (d + 1)`` points each are reserved, ``d`` the base variables): the leader of the
     looks, and those whose looks gained ``margin`` (chi2) over what the base parameters
@@ -130,6 +134,14 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     ranked = sorted(hyps, key=lambda h: h.screen["first_look"])
     log(f"  first look (level {level + 1}, H0 chi2 {chi0:.4g}): " + ", ".join(
         f"{h.name} {h.screen['first_look']:.4g}" for h in ranked[:6]))
+    chi0_lin = _linearised(w0, J0, np.zeros_like(w0), z0)[0]
+    if first_only and not (ranked and ranked[0].screen["first_look"] < chi0_lin - margin):
+        log(f"  no first look gains {margin:g} over the base parameters alone on the level "
+            f"({chi0_lin:.4g}): no candidate goes on")
+        for h in hyps:
+            h.screen.pop("_start", None)
+            h.screen.pop("_w", None)
+        return ranked
 
     # 2. second look: the other probes and the linearised optimum, in the order of the
     # first looks, of as many as the budget allows beside one calibration on the level
@@ -165,13 +177,15 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     # 3. calibration on the level of the best few: the leader, and the others whose looks
     # gained more on the level than the base parameters alone could (H0's linearised fit
     # there) by the verdict's margin
-    chi0_lin = _linearised(w0, J0, np.zeros_like(w0), z0)[0]
     finalists = [h for i, h in enumerate(second[:keep])
                  if i == 0 or h.screen["score"] < chi0_lin - margin]
-    for i, h in enumerate(finalists):
-        share = left() // (len(finalists) - i)
-        if i == 0:  # the leader's calibration is what the second look kept room for
-            share = min(left(), max(share, 6 * (h0.k + 1)))
+    least = least_shares(finalists, left(), 6 * (h0.k + 1))
+    for h in finalists[len(least):]:
+        h.notes.append("not calibrated on the screening level: the budget was spent on "
+                       "the better ranked")
+    for i, h in enumerate(finalists[:len(least)]):
+        # an even split of what is left, each at least its least share
+        share = min(max(left() // (len(least) - i), least[i]), left() - sum(least[i + 1:]))
         if share < 2 * h.k + 2:
             h.notes.append("not calibrated on the screening level: the budget was spent")
             continue
@@ -186,6 +200,18 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     return sorted(hyps, key=lambda h: (h.screen.get("calibrated", math.inf),
                                        h.screen.get("score", math.inf),
                                        h.screen["first_look"]))
+
+
+def least_shares(finalists: Sequence[Hypothesis], left: int, lead_least: int) -> list[int]:
+    """The least points each finalist's calibration on the level needs, ``2 k + 2`` (the
+    leader at least ``lead_least``, what the second look kept room for), for as many of
+    the best ranked as ``left`` can give theirs: where it cannot, the lowest ranked go
+    without, never one ranked above a calibrated one (seed 2042's true candidate, second,
+    was once skipped for lack of room while the third was calibrated with what it left)."""
+    least = [max(2 * h.k + 2, lead_least if i == 0 else 0) for i, h in enumerate(finalists)]
+    while len(least) > 1 and sum(least) > left:
+        least.pop()
+    return least
 
 
 def _same_look(a: Hypothesis, b: Hypothesis) -> bool:
