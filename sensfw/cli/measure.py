@@ -185,6 +185,10 @@ def diagnose(
         help="leave out candidates whose signature classes the levels do not show "
              "(--no-prune: race them all; the classes are read off the model calibrated "
              "without any effect, and a poor fit can hide the truth's class)")] = True,
+    global_search: Annotated[bool, typer.Option(
+        "--global/--local", help="--local: no space-filling design nor surrogate search, "
+        "Levenberg-Marquardt from the start values (bench/recovery.py: as right or more "
+        "often, in two thirds of the time)")] = True,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,
@@ -203,7 +207,8 @@ def diagnose(
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         names = [c.strip() for c in candidates.split(",")] if candidates else None
         result = run_diagnose(study, meas, runner, names, budget=budget, prune=prune,
-                              log=say)
+                              local="dfols" if global_search else "lm",
+                              global_phase=global_search, log=say)
     data = write_diagnosis(out_dir, study, result, time.perf_counter() - t0)
     out.print(f"verdict: {result.verdict}  ({result.reason}; {result.n_simulations} "
               f"simulations, {data['wall_s']:.0f} s)")

@@ -91,6 +91,19 @@ def _record_label(level: float, kind: str) -> str:
     return f"{level:.3g}" + (f" {kind.replace('_', ' ')}" if kind else "")
 
 
+def _search_text(criteria: dict) -> str:
+    """How each calibration searched (``diagnose``'s ``global_phase``)."""
+    if criteria.get("global_phase", True):
+        return ("Each calibration is global: a space-filling design, a surrogate of the "
+                "whole residual vector (principal components, one Gaussian process each) "
+                "that chooses new runs by its optimum and its lower confidence bound, then "
+                "derivative-free least squares (DFO-LS) from the best two points.")
+    return ("Each calibration is a local least squares (Levenberg-Marquardt with "
+            "finite-difference Jacobians) from the best run of its hypothesis so far "
+            "(diagnose --local); the residual surrogate below is fitted afterwards to "
+            "every run, to show how regular the response is where the search ended.")
+
+
 def _surrogate_cell(q: dict | None) -> str:
     """The residual surrogate's leave-one-out error per entry (in standard errors of the
     entries) over its best quarter of runs, and its runs."""
@@ -109,10 +122,7 @@ def write_diagnose_report(study, result, path) -> Path:
     page.p("Every hypothesis recalibrates the base parameters "
            f"({', '.join(result.variables)}, from {result.variables_from}): 'parameters' "
            "recalibrates them alone; each candidate effect is calibrated jointly with them. "
-           "Each calibration is global: a space-filling design, a surrogate of the whole "
-           "residual vector (principal components, one Gaussian process each) that chooses "
-           "new runs by its optimum and its lower confidence bound, then derivative-free "
-           "least squares (DFO-LS) from the best two points. Candidates share evidence: the "
+           + _search_text(result.criteria) + " Candidates share evidence: the "
            "runs of 'parameters' are every candidate's runs where the effect vanishes. The "
            "candidates are first raced on the level 'parameters' misfits most, the best "
            "calibrated there and the finalists at every level. The residuals are the dB "
