@@ -17,7 +17,11 @@ pytestmark = pytest.mark.slow
 
 BENCH = Path(__file__).resolve().parents[2] / "bench" / "recovery.py"
 #: benchmark case index -> seed 2025 + index (bench/recovery.py --seed 2025)
-CASES = [1, 3, 4]  # no effect; an effect the data cannot tell; contact hardening (right)
+#: no effect; contact hardening (right); a limit stop the data cannot tell (the truth does
+#: not beat H0 by the margin); a friction that H0 passes the noise's test on while the
+#: truth beats it by far (chi2 24 against 58 for 88 entries): named since the verdict no
+#: longer starts with the test
+CASES = [1, 4, 15, 16]
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +38,7 @@ def test_a_benchmark_case_ends_right(index, recovery):
 
     study = recovery.bench_study("quick", short=True)
     case = cases.draw(study, 2025 + index, recovery.LEVELS["quick"])
-    row = recovery.run_case(study, case, "dfols", workers=2)
+    row = recovery.run_case(study, case, recovery.DEFAULT_METHOD, workers=2)
     assert row["outcome"] in ("right", "correct", "correct (cannot tell)"), row
     assert row["noise_reached"], row
     # the default budget, plus H0's rematch before a candidate is credited: at most as many
