@@ -135,8 +135,10 @@ def write_diagnose_report(study, result, path) -> Path:
     page.p(f"FRF error: nominal model {result.errors['nominal']:.2f} dB, recalibrated "
            f"{result.errors['parameters']:.2f} dB (chi2 {h0['chi2']:.1f} for "
            f"{result.n_entries} entries; "
-           + ("the noise explains what is left" if h0["fits_noise"] else
-              "more than the noise explains") + ").")
+           + ("more than the noise explains" if not h0["fits_noise"] else
+              "the noise explains what is left" if not result.named else
+              "within the noise's chi-square bound, but the named effect explains far "
+              "more of it: an effect's own distortion counts in the measured noise") + ").")
     page.table(calibration_table(h0["calibration"]))
     page.h2("Candidates")
     if result.signature_classes:
