@@ -195,7 +195,8 @@ def diagnose(
     progress: ShowProgress = True,
 ) -> None:
     """Which effect does the model lack, and where? Recalibrate the base parameters alone and
-    with each candidate (global calibrations); rank by BIC and held-out levels."""
+    with each candidate (global calibrations, or local with --local); rank by BIC and
+    held-out levels."""
     from ..measure.diagnose import diagnose as run_diagnose
     from ..measure.prepared import load_measurements
     from ..report.diagnosis import write_diagnosis
