@@ -14,8 +14,8 @@ hypothesis's calibrated chi2 is within the noise (``chi2 / n <= 1 + 3 sqrt(2 / n
 simulations and wall time per case. "The data can tell" when, as issue 25's bar has it,
 the true hypothesis at the better of its true values and its calibration beats H0's
 calibrated BIC by the verdict's margin (10), whether or not H0 passes the noise's
-chi-square test (the verdict's first rule, :func:`sensfw.measure.discrepancy.fits`:
-where it does, the verdict is "parameters"; the figures say how often that happens);
+chi-square test (:func:`sensfw.measure.discrepancy.fits`; the figures say how often it
+does in such cases, where an effect's own distortion counts as noise);
 then the verdict must name the effect and place (naming it with the same
 effect at another place the channels cannot tell apart counts as right), otherwise it must
 be "parameters" or "none".
@@ -121,9 +121,9 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
 def judged(row: dict) -> dict:
     """The row with ``can_tell`` and ``outcome`` by the bar's definition: the data can tell
     when the true hypothesis, at the better of its true values and its calibration, beats
-    H0's calibrated BIC by the verdict's margin (whether or not H0 passes the noise's
-    chi-square test, the verdict's first rule: ``can_tell_gated`` also asks that)."""
-    from sensfw.measure import cases
+    H0's calibrated BIC by the verdict's margin, whether or not H0 passes the noise's
+    chi-square test (``can_tell_gated`` also asks that it does not)."""
+    from sensfw.measure import cases, discrepancy
 
     n = row["n_entries"]
     k0 = row.get("k_h0", 4 if str(row.get("study", "")).startswith("bert") else 3)
@@ -131,17 +131,11 @@ def judged(row: dict) -> dict:
     best = min(row["chi2_truth"], row["chi2_true_calibrated"])
     tell = bool(row["effect"]) and best + k * math.log(n) < row["chi2_h0"] + k0 * math.log(n) \
         - MARGIN
-    fits = row.get("h0_fits_noise", discrepancy_fits(row["chi2_h0"], n, k0))
+    # rows written before h0_fits_noise was: the test from H0's chi2 alone
+    fits = row.get("h0_fits_noise", discrepancy.fits(np.full(n, math.sqrt(row["chi2_h0"] / n)),
+                                                     k0))
     return {**row, "can_tell": tell, "can_tell_gated": tell and not fits,
             "outcome": cases.outcome(row, row["named"], row["verdict"], tell)}
-
-
-def discrepancy_fits(chi2: float, n: int, k: int) -> bool:
-    """:func:`sensfw.measure.discrepancy.fits` from a chi2 (rows written before
-    ``h0_fits_noise`` was)."""
-    from scipy.stats import chi2 as chi2_dist
-
-    return chi2 <= float(chi2_dist.ppf(1 - 1e-3, max(n - k, 1)))
 
 
 def truth_in_screen(rows: list[dict], truth: str) -> dict:
@@ -180,11 +174,11 @@ def summary(rows: list[dict]) -> None:
             print(f"  {k:28s} {v}")
         tell = [r for r in rs if r["effect"] and r["can_tell"]]
         gated = [r for r in tell if not r["can_tell_gated"]]
+        cannot = [r for r in rs if r["effect"] and not r["can_tell"]]
+        none = [r for r in rs if not r["effect"]]
 
         def right(r):
             return r["outcome"] == "right"
-        cannot = [r for r in rs if r["effect"] and not r["can_tell"]]
-        none = [r for r in rs if not r["effect"]]
 
         def rate(xs, ok):
             hit = sum(map(ok, xs))
@@ -202,7 +196,7 @@ def summary(rows: list[dict]) -> None:
         print("  true hypothesis calibrated to the noise or to its true values' chi2: "
               f"{rate(rs, as_low)}")
         print(f"  data can tell -> effect and place named: "
-              f"{rate(tell, lambda r: r['outcome'] == 'right')} (bar >= 90 %)")
+              f"{rate(tell, right)} (bar >= 90 %)")
         print(f"    of which H0 passes the noise's chi-square test: {len(gated)}, named "
               f"{sum(map(right, gated))}; among the others, named "
               f"{rate([r for r in tell if r['can_tell_gated']], right)}")

@@ -208,8 +208,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     for h in hyps:  # not calibrated: at its neutral values the candidate is H0
         if h.fit is None or h not in calibrated:
             h.fit = Fit(h.coords, Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w), None)
-            h.notes.append("screened only (at its neutral values: H0)" if h.screen else
-                           "not screened: H0 explains the measurement to its noise")
+            h.notes.append("screened only (at its neutral values: H0)")
     if n_levels >= 2:
         for h in [h0, *calibrated]:
             h.heldout = heldout(res, h)

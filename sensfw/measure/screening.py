@@ -138,9 +138,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     if first_only and not (ranked and ranked[0].screen["first_look"] < chi0_lin - margin):
         log(f"  no first look gains {margin:g} over the base parameters alone on the level "
             f"({chi0_lin:.4g}): no candidate goes on")
-        for h in hyps:
-            h.screen.pop("_start", None)
-            h.screen.pop("_w", None)
+        _drop_scratch(hyps)
         return ranked
 
     # 2. second look: the other probes and the linearised optimum, in the order of the
@@ -194,12 +192,18 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
         h.screen["calibrated_point"] = fit.values
         log(f"  {h.name} calibrated on level {level + 1}: chi2 {fit.chi2:.4g} "
             f"({fit.n_points} points)")
-    for h in hyps:
-        h.screen.pop("_start", None)
-        h.screen.pop("_w", None)
+    _drop_scratch(hyps)
     return sorted(hyps, key=lambda h: (h.screen.get("calibrated", math.inf),
                                        h.screen.get("score", math.inf),
                                        h.screen["first_look"]))
+
+
+def _drop_scratch(hyps: Sequence[Hypothesis]) -> None:
+    """Remove what only the race needs (start points, first-look residuals) from
+    ``h.screen``, which the rows and the report keep."""
+    for h in hyps:
+        h.screen.pop("_start", None)
+        h.screen.pop("_w", None)
 
 
 def least_shares(finalists: Sequence[Hypothesis], left: int, lead_least: int) -> list[int]:
