@@ -12,13 +12,13 @@ series with a Coulomb slider of slip force ``F_i``.
 
 from __future__ import annotations
 
-from typing import Annotated, ClassVar
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
 
 from ..errors import SensfwError
-from ..options import Int
+from ..options import Float, Int
 from ..params import MM, Parameter
 from ..plugins import effects
 from .base import Effect, add_spring_along_normal, decade_probes
@@ -51,7 +51,16 @@ class MicroSlip(Effect):
     quantiles: ``chi < 0`` puts more of them at small slips, ``chi > 0`` near
     ``phi_max``), scaled so that all the forces add up to
     ``microslip_force``, the force at which the whole interface slips (friction coefficient
-    x bolt preload). Where bending makes the interface slip most, the elements slip first:
+    x bolt preload). ``spacing = "log"`` (an option) discretises the same density
+    differently: the elements' slip displacements are log-spaced over ``decades`` decades
+    below ``phi_max`` (the lowest bin takes the tail below), each element with the stiffness
+    of its bin's share of the density and the bin's force-preserving mean slip (``int phi
+    rho / int rho``), so the total stiffness and the macro-slip force are the density's
+    exactly, and the low-force tail that equal-stiffness quantiles leave to one element
+    (chi = -0.9, 6 quantiles, a macro-slip force of 530 N: slip forces 2e-8, 1e-3, 0.2, 5,
+    60 and 460 N summed over the points) gets one element per ``decades / elements``
+    decades. Where bending makes the interface slip most, the
+    elements slip first:
     the joint softens from low levels on and more as the load grows, and dissipates
     (Masing's rule: a stuck element is lossless, a slipping one dissipates ``4 F_i (a -
     phi_i)`` per cycle of slip amplitude ``a``).
@@ -72,14 +81,27 @@ class MicroSlip(Effect):
                            "quantiles of the slip density (3 resolve its middle; a "
                            "density whose low-force tail matters, as on records far "
                            "apart in level, needs more)")
+        spacing: Literal["quantile", "log"] = Field(
+            "quantile", description="how the elements discretise the slip density: "
+                                    "'quantile' (equal springs at its quantiles) or 'log' "
+                                    "(log-spaced slips over `decades`, springs weighted by "
+                                    "the density)")
+        decades: Annotated[Float, Field(gt=0.0, le=12.0)] = Field(
+            4.0, description="with spacing = 'log': the decades of slip below the largest "
+                             "that the elements resolve, a number in (0, 12]")
 
-    def __init__(self, attach: str | None = None, elements: int = 3):
+    def __init__(self, attach: str | None = None, elements: int = 3,
+                 spacing: str = "quantile", decades: float = 4.0):
         super().__init__(attach)
         self.elements = int(elements)
+        self.spacing = spacing
+        self.decades = float(decades)
 
     def spec(self) -> dict:
-        return {**super().spec(), **({} if self.elements == 3 else
-                                     {"elements": self.elements})}
+        extra = {} if self.elements == 3 else {"elements": self.elements}
+        if self.spacing != "quantile":
+            extra.update(spacing=self.spacing, decades=self.decades)
+        return {**super().spec(), **extra}
 
     def parameters(self):
         # ranges from the UNESP-BERT beam: two M6 bolts at 5 Nm (~4 kN preload each) with
@@ -100,10 +122,19 @@ class MicroSlip(Effect):
         """``(k_i, F_i)`` (N/m, N) of the elements at one of ``points`` interface points of a
         joint whose tangential stiffness is ``stiffness`` (N/m)."""
         n = self.elements
-        k = (1.0 - p["microslip_residual"]) * stiffness / (n * points)
-        q = ((np.arange(n) + 0.5) / n) ** (1.0 / (1.0 + p["microslip_exponent"]))
-        phi = q * p["microslip_force"] / points / (k * q.sum())
-        return [(k, float(k * f)) for f in phi]
+        k_all = (1.0 - p["microslip_residual"]) * stiffness / points
+        a = 1.0 + p["microslip_exponent"]
+        if self.spacing == "quantile":
+            k = np.full(n, k_all / n)
+            phi = ((np.arange(n) + 0.5) / n) ** (1.0 / a)
+        else:  # log-spaced bins of the density phi^chi on [0, 1], the tail in the first
+            edges = np.concatenate([[0.0], 10.0 ** (-self.decades * (1.0 - np.arange(1, n + 1)
+                                                                      / n))])
+            mass = np.diff(edges ** a)  # int phi^chi, up to the common factor 1 / a
+            k = k_all * mass / mass.sum()
+            phi = a / (a + 1.0) * np.diff(edges ** (a + 1.0)) / mass
+        force = k * phi * (p["microslip_force"] / points) / float(np.sum(k * phi))
+        return [(float(ki), float(fi)) for ki, fi in zip(k, force, strict=True)]
 
     def probes(self, comparisons):
         """The macro-slip force at 200 N, 2 kN and 20 kN with a tenth of the joint's

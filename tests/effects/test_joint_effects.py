@@ -345,3 +345,44 @@ def test_micro_slip_elements_are_the_slip_densitys_quantiles(n):
     assert MicroSlip().elements == 3
     with pytest.raises(OptionError, match="elements"):
         make_effect({"name": "micro_slip", "elements": 0})
+
+
+@pytest.mark.parametrize("chi", [-0.9, -0.5, 1.0])
+def test_micro_slip_log_spacing_keeps_the_density_at_its_bin_edges(chi):
+    """``spacing = "log"``: the elements' bins are log-spaced over ``decades`` below the
+    largest slip, the first bin taking the tail below. Each element carries its bin's share
+    of the density ``phi^chi``, so the stiffness of the elements whose slips lie below an
+    edge ``e`` is the density's CDF there, ``(e / phi_max)^(1 + chi)``, exactly (what the
+    joint has lost once the slip amplitude passes ``e``); each slip is its bin's mean under
+    the density (``int phi rho / int rho``, by quadrature here), so it lies inside its bin;
+    springs and forces add up to the parameters as with quantiles."""
+    from scipy.integrate import quad
+
+    from sensfw.errors import OptionError
+    from sensfw.models.places import make_effect
+
+    n, decades = 8, 4.0
+    p = {"microslip_residual": 0.2, "microslip_force": 400.0, "microslip_exponent": chi}
+    eff = make_effect({"name": "micro_slip", "elements": n, "spacing": "log",
+                       "decades": decades})
+    parts = eff.jenkins(p, 1.25e8)
+    k = np.array([kf[0] for kf in parts])
+    assert k.sum() == pytest.approx(1e8) and sum(f for _, f in parts) == pytest.approx(400.0)
+    slips = np.array([f / k for k, f in parts])
+    edges = 10.0 ** (-decades * (1 - np.arange(1, n + 1) / n))  # upper edges / phi_max
+    # the force sets the slips' scale: phi_max from the top bin's mean
+    phi_max = slips[-1] / (quad(lambda x: x ** (chi + 1), edges[-2], 1)[0]
+                           / quad(lambda x: x ** chi, edges[-2], 1)[0])
+    assert np.cumsum(k) / k.sum() == pytest.approx(edges ** (1 + chi), rel=1e-9)
+    lower = np.concatenate([[0.0], edges[:-1]])
+    for i in range(1, n):  # the tail bin's mean is checked by the CDF and the total force
+        mean = (quad(lambda x: x ** (chi + 1), lower[i], edges[i])[0]
+                / quad(lambda x: x ** chi, lower[i], edges[i])[0])
+        assert slips[i] / phi_max == pytest.approx(mean, rel=1e-6)
+        assert lower[i] < slips[i] / phi_max < edges[i]
+    assert eff.spec() == {"name": "micro_slip", "elements": n, "spacing": "log",
+                          "decades": decades}
+    with pytest.raises(OptionError, match="spacing"):
+        make_effect({"name": "micro_slip", "spacing": "linear"})
+    with pytest.raises(OptionError, match="decades"):
+        make_effect({"name": "micro_slip", "spacing": "log", "decades": 0})
