@@ -208,31 +208,33 @@ def test_the_second_round_meets_the_bar_at_every_level(linear, augmented2):
 
 
 #: issue 27: the micro-slip model with 6 Jenkins elements per interface point (3 left no
-#: slip force between the random records' sub-newton forces and the sweeps'; README) and
+#: slip force between the random records' sub-newton forces and the sweeps'; README), the
+#: second round's Coulomb friction at the shaker's drive point (dry_friction@beam1) and
 #: Young's modulus free (66-74 GPa: wrought aluminium 68.9-71.7 GPa, and +-3 % in E for the
 #: beams' thickness tolerance), calibrated by ``sensfw calibrate --local`` on the sweeps AND
-#: the random records at 0.05, 0.15 and 0.30 V, from the 3-element model's calibration on
-#: the same records (about 260 simulations; README)
-BOTH_KINDS = {"excitation_gain": 57.33308236854197, "clamp_stiffness": 27225.105097665713,
-              "joint_stiffness": 2703287.2870570086, "damping_ratio": 0.00895389779737657,
-              "microslip_residual": 0.016565690959174373,
-              "microslip_force": 531.0191858294602, "microslip_exponent": -0.9,
-              "youngs_modulus": 73.98450390273844}
-SIX_ELEMENTS = (("micro_slip", "joint", {"elements": 6}),)
+#: the random records at 0.05, 0.15 and 0.30 V, from the 6-element model's calibration on
+#: the same records with the second round's friction (348 simulations; README)
+BOTH_KINDS = {"excitation_gain": 56.489254761548125, "clamp_stiffness": 17689.440757235585,
+              "joint_stiffness": 3074093.803839377, "damping_ratio": 0.00898317665496985,
+              "microslip_residual": 0.02198804648521152,
+              "microslip_force": 571.9819765479715, "microslip_exponent": -0.9,
+              "youngs_modulus": 73.64626083772563,
+              "dry_friction_force": 0.4482015502507226,
+              "dry_friction_stiffness": 5.40195241613668}
+BOTH_KINDS_EFFECTS = (("micro_slip", "joint", {"elements": 6}), ("dry_friction", "beam1"))
 
 
 @pytest.mark.slow
 def test_calibrated_on_both_kinds_the_beam_predicts_the_other_records(bert, cli,
                                                                       tmp_path):
     """The six records the BOTH_KINDS calibration did not see (sweeps and random records at
-    0.10, 0.20 and 0.25 V), as the README's table has them: laser error at most 0.9 dB on
-    every one (0.88, 0.44, 0.31 dB on the sweeps, 0.50, 0.81, 0.82 on the random records;
-    every sweep-fitted model was 1.5-2.3 dB off on the random ones, issue 27); resonance
-    within 0.25 Hz on the random records (-0.13, +0.19, +0.25 Hz; earlier 0.7-1.2) and
-    7/16 Hz on the sweeps (+0.44, +0.25, +0.31). Issue 27's bar (0.3 Hz and 1.0 dB on
-    every record) is not met on the sweeps at 0.10 and 0.25 V: the test pins what is
-    (shifts are whole 1/16 Hz lines of a deterministic simulation)."""
-    src = augmented_study(tmp_path, BOTH_KINDS, SIX_ELEMENTS)
+    0.10, 0.20 and 0.25 V), as the README's table has them: issue 27's bar, resonance
+    within 0.3 Hz and laser error at most 1.0 dB on every one (measured: +0.13, +0.25,
+    +0.25 Hz and 0.85, 0.45, 0.36 dB on the sweeps, -0.19, +0.19, +0.25 Hz and 0.53, 0.79,
+    0.84 dB on the random records; every sweep-fitted model was 0.7-1.2 Hz and 1.5-2.3 dB
+    off on the random ones, the micro-slip model alone +0.44 Hz on the 0.10 V sweep).
+    Shifts are whole 1/16 Hz lines of a deterministic simulation."""
+    src = augmented_study(tmp_path, BOTH_KINDS, BOTH_KINDS_EFFECTS)
     random = bert.parent / "random"
     args = [a for lv in ("0p10", "0p20", "0p25") for folder in (bert, random)
             for a in ("-m", folder / f"level_{lv}")]
@@ -248,6 +250,5 @@ def test_calibrated_on_both_kinds_the_beam_predicts_the_other_records(bert, cli,
         res = resonance(c)
         shift = res["model_hz"] - res["measured_hz"]
         err = c["frf_error_db"]["rms_in_band"]
-        assert err <= 0.9, (c["excitation"]["kind"], c["level"], err)
-        limit = 0.25 if c["excitation"]["kind"] == "random" else 7 / 16
-        assert abs(shift) <= limit + 1e-9, (c["excitation"]["kind"], c["level"], shift)
+        assert err <= 1.0, (c["excitation"]["kind"], c["level"], err)
+        assert abs(shift) <= 0.3, (c["excitation"]["kind"], c["level"], shift)
