@@ -8,6 +8,7 @@ from . import (  # noqa: F401  (register the built-ins)
     morris,
     oat,
     optimal,
+    plackett_burman,
     response_surface,
     sobol,
     subset,

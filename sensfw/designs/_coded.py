@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..params import DesignSpace
+from .base import ScreeningResult
 
 
 def to_table(space: DesignSpace, coded: np.ndarray, prefix: str) -> pd.DataFrame:
@@ -45,3 +46,31 @@ def linear_importance(space: DesignSpace, table: pd.DataFrame, y: np.ndarray,
     imp = pd.Series(np.abs(lin) + np.abs(quad), index=space.names)
     notes = [] if ok.all() else [f"{(~ok).sum()} failed runs left out of the fit"]
     return imp / imp.max() if imp.max() > 0 else imp, tab, notes
+
+
+def two_level_effects(space: DesignSpace, table: pd.DataFrame, y: np.ndarray,
+                      notes: list[str], aliased: dict[str, str]) -> ScreeningResult:
+    """Main effects of a two-level design (mean response at the high level minus mean at the
+    low level, over the corner runs), importance = |effect| normalised to the largest; centre
+    runs give the curvature check. ``aliased``: what each main effect is aliased with."""
+    notes = list(notes)
+    Z = np.sign(np.round(space.code(table).to_numpy(), 12))
+    ok = np.isfinite(y)
+    corner = np.all(Z != 0, axis=1)
+    recs = []
+    for i, n in enumerate(space.names):
+        hi = ok & corner & (Z[:, i] > 0)
+        lo = ok & corner & (Z[:, i] < 0)
+        eff = y[hi].mean() - y[lo].mean() if hi.any() and lo.any() else np.nan
+        recs.append({"variable": n, "effect": eff, "aliased_with": aliased.get(n, "")})
+    tab = pd.DataFrame(recs).set_index("variable")
+    if not ok.all():
+        notes.append(f"{(~ok).sum()} failed runs left out; the design is no longer "
+                     "balanced, effects are biased by the missing runs")
+    center = ok & ~corner
+    if center.any():
+        curv = y[center].mean() - y[ok & corner].mean()
+        notes.append(f"centre runs minus corner mean: {curv:.4g} (curvature check)")
+    imp = tab["effect"].abs()
+    imp = imp / imp.max() if imp.max() > 0 else imp
+    return ScreeningResult(importance=imp.fillna(0.0), table=tab, notes=notes)

@@ -19,7 +19,7 @@ from pydantic import Field
 from ..options import Int, PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
-from ._coded import to_table
+from ._coded import to_table, two_level_effects
 from .base import Design, DesignError, ScreeningResult, responses
 
 LETTERS = string.ascii_lowercase
@@ -165,25 +165,6 @@ class FractionalFactorial(Design):
     def analyze(self, space: DesignSpace, table: pd.DataFrame, y) -> ScreeningResult:
         y = responses(table, y, self.name)
         X, gen, res = self.matrix(len(space))
-        Z = np.sign(np.round(space.code(table).to_numpy(), 12))
-        ok = np.isfinite(y)
-        corner = np.all(Z != 0, axis=1)
         al = aliases(X, space.names)
-        recs = []
-        for i, n in enumerate(space.names):
-            hi = ok & corner & (Z[:, i] > 0)
-            lo = ok & corner & (Z[:, i] < 0)
-            eff = y[hi].mean() - y[lo].mean() if hi.any() and lo.any() else np.nan
-            recs.append({"variable": n, "effect": eff, "aliased_with": ", ".join(al[n])})
-        tab = pd.DataFrame(recs).set_index("variable")
-        notes = [f"generators {gen}, resolution {res}"]
-        if not ok.all():
-            notes.append(f"{(~ok).sum()} failed runs left out; the design is no longer "
-                         "balanced, effects are biased by the missing runs")
-        center = ok & ~corner
-        if center.any():
-            curv = y[center].mean() - y[ok & corner].mean()
-            notes.append(f"centre runs minus corner mean: {curv:.4g} (curvature check)")
-        imp = tab["effect"].abs()
-        imp = imp / imp.max() if imp.max() > 0 else imp
-        return ScreeningResult(importance=imp.fillna(0.0), table=tab, notes=notes)
+        return two_level_effects(space, table, y, [f"generators {gen}, resolution {res}"],
+                                 {n: ", ".join(al[n]) for n in space.names})

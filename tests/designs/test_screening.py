@@ -6,6 +6,7 @@ import pytest
 
 from sensfw.designs import make_design
 from sensfw.designs.fractional_factorial import resolution
+from sensfw.designs.plackett_burman import partial_aliasing
 from sensfw.models.shaft_assembly import GROUPS, PARAMETERS
 from sensfw.params import DesignSpace, Parameter, ParameterSet
 from sensfw.testing import ishigami, ishigami_indices, quadratic
@@ -89,6 +90,24 @@ def test_fractional_factorial_resolution_iv_keeps_main_effects_clear():
     res = ff.analyze(space, table, 2 * X[:, 0] - X[:, 4])
     assert res.table.loc["x1", "effect"] == pytest.approx(4.0)
     assert res.table.loc["x1", "aliased_with"] == ""
+
+
+@pytest.mark.parametrize(("k", "runs", "aliasing"), [(11, 12, 1 / 3), (19, 20, 0.6)])
+def test_plackett_burman_estimates_main_effects_with_partial_aliasing(k, runs, aliasing):
+    # Plackett & Burman (1946): orthogonal main-effect columns in the fewest runs (a multiple
+    # of 4); the 12-run design's interaction columns correlate with main effects by 1/3, the
+    # 20-run design's by 0.2 or 0.6 (no full alias, unlike a power-of-two fraction)
+    space = unit_space(k)
+    pb = make_design("plackett_burman")
+    table = pb.generate(space)
+    X = table.to_numpy()
+    assert len(table) == runs == pb.n_runs(space)
+    np.testing.assert_array_equal(X.T @ X, runs * np.eye(k))
+    assert partial_aliasing(X) == pytest.approx(aliasing)
+    res = pb.analyze(space, table, 2 * X[:, 0] - X[:, 4] + 0.5)
+    assert res.table.loc["x1", "effect"] == pytest.approx(4.0)
+    assert res.table.loc["x5", "effect"] == pytest.approx(-2.0)
+    assert res.ranking[:2] == ["x1", "x5"] and f"{aliasing:.2f}" in res.notes[0]
 
 
 def test_resolution_is_checked_not_trusted():
