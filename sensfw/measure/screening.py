@@ -66,11 +66,15 @@ def _linearised(w0: np.ndarray, J: np.ndarray | None, d: np.ndarray, base_z: np.
 
 
 def _scaled_probe(h: Hypothesis, probe: dict, c: float) -> dict:
-    """The probe's effect parameters moved a fraction ``c`` of the way from neutral."""
+    """The probe's effect parameters moved a fraction ``c`` of the way from neutral: the
+    parameters that make the effect vanish (``Effect.neutral``: a mass, a force, a
+    coefficient) scaled, the others (a mode's frequency, a friction's velocity) where the
+    probe has them: the probe's change of the residuals was measured from the effect's
+    absence, where they do not matter, so they are not on the line from neutral."""
     out = {}
     for a in h.coords.axes:
         if a.name in probe:
-            n = h.neutral.get(a.name, probe[a.name])
+            n = h.effect.neutral.get(a.name, probe[a.name])
             out[a.name] = float(np.clip(n + c * (probe[a.name] - n), a.low, a.high))
     return out
 
