@@ -205,6 +205,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
                     fits=[h0.fit, *(h.fit for h in calibrated if h is not lead)])
                 log(f"  {lead.name}: chi2 {lead.fit.chi2:.4g}, H0 {h0.fit.chi2:.4g} with "
                     "the leader's scatter")
+            _nest(h0, calibrated)  # twins joined, and the wider scatter weighs fits anew
     for h in hyps:  # not calibrated: at its neutral values the candidate is H0
         if h.fit is None or h not in calibrated:
             h.fit = Fit(h.coords, Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w), None)
@@ -262,6 +263,12 @@ def _settle_h0(res: Residuals, h0: Hypothesis, calibrated: list[Hypothesis], bud
     lead = min(calibrated, key=lambda h: h.bic(n))
     if lead.bic(n) < h0.bic(n) - margin:
         _rematch_h0(res, h0, lead, opts, log)
+    _nest(h0, calibrated)
+
+
+def _nest(h0: Hypothesis, calibrated: Sequence[Hypothesis]) -> None:
+    """A candidate worse than H0 stands at its neutral values, where it is H0: it nests
+    H0, so its optimum is at most H0's."""
     for h in calibrated:
         if h.fit.chi2 > h0.fit.chi2:
             h.fit.best = Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w)
