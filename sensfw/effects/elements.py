@@ -126,9 +126,13 @@ class FlexibleMode(Effect):
                         (0.0, 0.0), law)
 
     def probes(self, comparisons):
-        """A measured resonance the model does not have is where the missing mode is (the
-        coupled peak sits above the uncoupled frequency); without one, three frequencies
-        spread over the range."""
+        """A measured resonance the model does not have is where the missing mode is:
+        probes at the peak and 15 % below it, though the mode's own frequency may lie on
+        either side of its coupled peak (an oscillator attached to a structure is pushed
+        away from the structure's nearest mode: ``bench/recovery.py`` seeds 2050 and 2042
+        have modes of 798 and 3691 Hz whose new peaks are at 753 and 2747 Hz); the
+        linearised fit and the calibration take it from there. Without such a peak, four
+        frequencies spread over the range."""
         lo, hi = 600.0, 4500.0
         out = []
         for c in comparisons[:1]:
