@@ -18,13 +18,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sensfw.evaluate import simulate, variant_spec
 from sensfw.excitation import SteppedSine
 from sensfw.measure.compare import compare_measurements
 from sensfw.measure.io import FRFRecord, write_uff
 from sensfw.measure.prepared import load_measurements
-from sensfw.measure.synthetic import model_with_effects
 from sensfw.runs import Runner, RunStore
-from sensfw.runs.spec import simulate_with_halving
 from sensfw.signal import frf
 from sensfw.signal.stepped import stepped_frf, steps_of
 from sensfw.study import Study
@@ -45,31 +44,44 @@ def _bert_loop():
 BERT_LOOP = _bert_loop()
 
 
-def model_run(study: Study, excitation):
-    model = model_with_effects(study, [])
-    p = study.parameters.nominal()
-    for k, d in model.parameters().items():
-        p.setdefault(k, d.nominal)
-    return simulate_with_halving(model, p, excitation, study.solver)
+def model_runs(study: Study, excitations, tmp: Path) -> list:
+    """The study's model at its nominal values driven by each of ``excitations``: the runs
+    in parallel (two workers), their signals in order."""
+    specs = [variant_spec(study, {}, ex) for ex in excitations]
+    with Runner(RunStore(tmp / "model-runs"), backend="processes", workers=2) as runner:
+        signals, errors = simulate(runner, specs)
+    assert all(sig is not None for sig in signals), errors
+    return signals
 
 
-def stepped(study: Study, level: float, lines, direction: str, dwell: float) -> FRFRecord:
-    """The study's model stepped on ``lines`` at ``level``: its steady-state FRF record."""
-    ex = SteppedSine.at(lines, dwell, study.excitation.fs, level, direction=direction,
-                        signal_unit=study.excitation.unit)
-    sig = model_run(study, ex)
+def stepping(study: Study, level: float, lines, direction: str, dwell: float) -> SteppedSine:
+    return SteppedSine.at(lines, dwell, study.excitation.fs, level, direction=direction,
+                          signal_unit=study.excitation.unit)
+
+
+def stepped(study: Study, sig, direction: str) -> FRFRecord:
+    """The steady-state FRF record of a stepped-sine run ``sig`` of the study's model."""
     r = stepped_frf(sig.force, sig.channels, sig.fs, steps_of(sig.f_inst, sig.fs))
     return FRFRecord.checked("model", r.f, r.frf, {"force": study.excitation.unit,
                                                     **sig.units}, kind="stepped_sine",
                              direction=direction)
 
 
-def swept_db(study: Study, level: float, lines) -> np.ndarray:
-    """dB of the study's model's swept FRF at ``level`` (the study's sweep, Hv over the
-    whole record, unsmoothed) at ``lines``."""
-    sig = model_run(study, study.excitation.with_amplitude(level))
-    f, h = frf(sig.force, sig.channel(study.output), sig.fs, estimator="Hv")
-    return 20 * np.log10(np.abs(np.interp(lines, f, h.real) + 1j * np.interp(lines, f, h.imag)))
+def up_down_swept(study: Study, level: float, lines, dwell: float, tmp: Path,
+                  sweep: bool = True):
+    """The study's model stepped up and down on ``lines`` at ``level`` (FRF records) and,
+    with ``sweep``, the dB of its swept FRF at ``level`` (the study's sweep, Hv over the
+    whole record, unsmoothed) at ``lines``: the three runs in parallel."""
+    excitations = [stepping(study, level, lines, d, dwell) for d in ("up", "down")]
+    if sweep:
+        excitations.append(study.excitation.with_amplitude(level))
+    up, down, *swept = model_runs(study, excitations, tmp)
+    out = [stepped(study, up, "up"), stepped(study, down, "down")]
+    for sig in swept:
+        f, h = frf(sig.force, sig.channel(study.output), sig.fs, estimator="Hv")
+        out.append(20 * np.log10(np.abs(np.interp(lines, f, h.real)
+                                        + 1j * np.interp(lines, f, h.imag))))
+    return out
 
 
 def db(rec: FRFRecord, channel: str) -> np.ndarray:
@@ -94,9 +106,9 @@ def test_linear_beam_stepped_is_swept_and_compares_with_itself(tmp_path):
     line, no jump."""
     study = Study.load(BERT_LOOP.calibrated_study(tmp_path, BERT_LOOP.LINEAR))
     lines = np.arange(90.0, 100.01, 0.5)
-    up, down = (stepped(study, 0.05, lines, d, 1.2) for d in ("up", "down"))
+    up, down, sweep = up_down_swept(study, 0.05, lines, 1.2, tmp_path)
     assert np.max(np.abs(db(up, "Laser") - db(down, "Laser"))) < 0.01
-    assert np.max(np.abs(db(up, "Laser") - swept_db(study, 0.05, lines))) < 0.05
+    assert np.max(np.abs(db(up, "Laser") - sweep)) < 0.05
     meas, cmp = compare_records(study, [(up, 0.05), (down, 0.05)], tmp_path)
     assert all(m.drive.dwell != 1.2 for m in meas)
     for c in cmp.levels:
@@ -117,12 +129,11 @@ def test_micro_slip_beam_up_down_and_sweep_differ(tmp_path):
     study = Study.load(BERT_LOOP.augmented_study(
         tmp_path, BERT_LOOP.AUGMENTED2, (("micro_slip", "joint"), ("dry_friction", "beam1"))))
     lines = np.arange(88.5, 94.01, 0.5)
-    up, down = (stepped(study, 0.3, lines, d, 0.85) for d in ("up", "down"))
+    up, down, sweep = up_down_swept(study, 0.3, lines, 0.85, tmp_path)
     du, dd = db(up, "Laser"), db(down, "Laser")
     assert lines[np.argmax(du)] == lines[np.argmax(dd)] == 91.5
     diff = np.abs(du - dd)
     assert 0.2 < diff.max() < 1.0 and 89.5 <= lines[np.argmax(diff)] <= 91.5
-    sweep = swept_db(study, 0.3, lines)
     assert np.sqrt(np.mean((du - sweep) ** 2)) > 0.3
 
 
@@ -139,12 +150,11 @@ def test_shaft_model_near_linear_then_jumping(tmp_path):
     study = Study.load(ROOT / "studies" / "quick.toml")
     lines = np.arange(1300.0, 1700.01, 10.0)
     ch = study.output
-    up, down = (stepped(study, 0.01, lines, d, 0.06) for d in ("up", "down"))
-    sweep = swept_db(study, 0.01, lines)
+    up, down, sweep = up_down_swept(study, 0.01, lines, 0.06, tmp_path / "0.01")
     away = (np.abs(lines - 1505.0) >= 30.0) & (lines <= 1650.0)
     for rec in (up, down):
         assert np.max(np.abs(db(rec, ch) - sweep)[away]) < 0.5
-    up, down = (stepped(study, 0.1, lines, d, 0.06) for d in ("up", "down"))
+    up, down = up_down_swept(study, 0.1, lines, 0.06, tmp_path / "0.1", sweep=False)
     diff = db(down, ch) - db(up, ch)
     branch = lines[diff > 10.0]
     assert len(branch) and branch.min() >= 1330.0 and branch.max() <= 1450.0, branch
