@@ -111,8 +111,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     ``diagnose --local``, ``bench/recovery.py --method local``). Over the 40 cases of
     ``bench/recovery.py --short`` the local search names the truth as often or more
     (17 of 28 against 15) in two thirds of the time (README, "Benchmarks"), but not in
-    every case of the suite
-    (``tests/measure/test_diagnose.py``'s friction at the clutch's drive side: the local
+    every hand-picked case
+    (``bench/verdicts.py``'s friction at the clutch's drive side: the local
     search names the crank side, the true candidate stalled at H0's chi2), so the global
     search stays the default."""
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
@@ -318,7 +318,7 @@ def _restart_race(res: Residuals, h0: Hypothesis, ranked: Sequence[Hypothesis],
     locally (DFO-LS) from the best of their runs, H0's included, and join ``calibrated``.
     A race calibration starts at H0's optimum; where that was a stall (the refresh fell
     by more than the margin), the race ranked the candidates by how well each escaped
-    the stall, not by what each explains (``tests/measure/test_diagnose.py``'s preload
+    the stall, not by what each explains (``bench/verdicts.py``'s preload
     case: the true candidate stalled at chi2 398 on its level from H0's 725, H0 refreshed
     reached 325.5 and no chosen candidate beat that by the margin)."""
     base = h0.fit.values
