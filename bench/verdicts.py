@@ -157,13 +157,16 @@ def main() -> None:
             t0 = time.perf_counter()
             res = run(case, s, runner, tmp / f"case{i}")
             wall = time.perf_counter() - t0
-            ok = res.verdict in case.expect and not nested(res)
+            above = nested(res)
+            ok = res.verdict in case.expect and not above
             wrong += not ok
             best = min(r["chi2"] for r in res.rows)
             print(f"{case.id:32s} {'yes' if case.suite else '':5s} {'/'.join(case.expect):28s} "
                   f"{res.verdict:28s} {'yes' if ok else 'NO':3s} {res.rows[0]['chi2']:9.1f} "
-                  f"{best:9.1f} {'yes' if not nested(res) else 'NO':5s} "
+                  f"{best:9.1f} {'NO' if above else 'yes':5s} "
                   f"{res.n_simulations:5d} {wall:7.0f}", flush=True)
+            if not ok:
+                print(f"    {res.reason}; above H0: {above}; {case.why}", flush=True)
     print(f"{len(chosen) - wrong} of {len(chosen)} cases end as expected")
     sys.exit(1 if wrong else 0)
 

@@ -256,15 +256,11 @@ class JenkinsSliders:
         (``None`` on the ground)."""
         def idx(body, r, ln):
             axis = 0 if ln.jenkins[2] == (1.0, 0.0) else 1
-            return coordinate_index(body, r, axis)
+            i = coordinate_index(body, r, axis)
+            return -1 if i is None else i
 
-        i0 = [idx(ln.body0, ln.r0, ln) for ln in self.links]
-        i1 = [idx(ln.body1, ln.r1, ln) for ln in self.links]
-        # a point on the ground reads coordinate 0 times 0
-        self.index0 = np.array([0 if i is None else i for i in i0])
-        self.index1 = np.array([0 if i is None else i for i in i1])
-        self.on0 = np.array([0.0 if i is None else 1.0 for i in i0])
-        self.on1 = np.array([0.0 if i is None else 1.0 for i in i1])
+        self.index0 = np.array([idx(ln.body0, ln.r0, ln) for ln in self.links])
+        self.index1 = np.array([idx(ln.body1, ln.r1, ln) for ln in self.links])
         self.rest = np.array([(ln.offset or (0.0, 0.0))[0 if ln.jenkins[2] == (1.0, 0.0)
                                                          else 1] for ln in self.links])
 
@@ -273,8 +269,8 @@ class JenkinsSliders:
         slider moves only where the elastic trial force ``k (s - x)`` exceeds its slip
         force, to where that force is the slip force (a stuck slider keeps ``x``; only the
         moved ones are passed to the symbolic variables)."""
-        q = np.asarray(q, float)
-        s = q[self.index1] * self.on1 - q[self.index0] * self.on0 - self.rest
+        qe = np.append(np.asarray(q, float), 0.0)  # index -1: the ground
+        s = qe[self.index1] - qe[self.index0] - self.rest
         trial = self.k * (s - self.x)
         moved = np.flatnonzero(np.abs(trial) > self.force)
         if not moved.size:
