@@ -109,7 +109,7 @@ def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_pat
     study_file = tmp_path / "s.toml"
     study_file.write_text(tomlkit.dumps(short_quick()))
     proc = cli("diagnose", study_file, *files, "--out", tmp_path / "d", "--no-progress",
-               "--candidates", "flexible_mode@driveshaft",
+               "--candidates", "flexible_mode@driveshaft", "--budget", 150,
                timeout=1800)
     assert proc.returncode == 0, proc.stderr
     diag = json.loads((tmp_path / "d" / "diagnose.json").read_text())
@@ -120,7 +120,7 @@ def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_pat
     assert "data:image/png;base64" in html and "held-out" in html
     proc = cli("augment", study_file, *files, "--effect", "flexible_mode@driveshaft",
                "--start-from", tmp_path / "d" / "diagnose.json", "--out", tmp_path / "a",
-               "--budget", 200, "--no-progress", timeout=1800)
+               "--budget", 120, "--no-progress", timeout=1800)
     assert proc.returncode == 0, proc.stderr
     aug = json.loads((tmp_path / "a" / "augment.json").read_text())
     steps = {t["step"]: t for t in aug["trajectory"]}
