@@ -15,8 +15,10 @@ top-down:
    values); then the most promising candidates at every level, again seeded with H0's
    runs; H0 is tried again from every calibrated candidate's base values and, if
    that moves its optimum by more than the margin, the race's other calibrated candidates
-   start again from there; places whose first looks were a calibrated candidate's to
-   round-off are run at its optimum and join it where they tie (:func:`_join_twins`);
+   start again from there; the leader's effect at its other calibrated places starts
+   again from the leader's optimum (:func:`_other_places`); places whose first looks were
+   a calibrated candidate's to round-off are run at its optimum and join it where they tie
+   (:func:`_join_twins`);
 3. **ranking** (:mod:`.ranking`): BIC, held-out levels, ties and trades, the verdict.
 
 ``budget`` counts simulations (one per point and level) for all of it: about 30 % for H0,
@@ -25,7 +27,8 @@ leaves flows to the next. The held-out predictions (one per level and calibrated
 hypothesis) and the model-scatter runs (``2 d``) come on top, and so do H0's rematch
 before a candidate is credited (at most as many points as the leader spent) and, after a
 refresh of H0, the race's restart (a start per probe and race optimum of each candidate
-calibrated in the race, ``6 k + 6`` points for each of the best ``final``), so a diagnosis
+calibrated in the race, ``6 k + 6`` points for each of the best ``final``) and the
+leader's effect at its other places (a run and at most ``6 k + 6`` points each), so a diagnosis
 ends within about twice its budget (the suite's preload case: 306 simulations for 200).
 """
 
@@ -194,6 +197,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             _settle_h0(res, h0, calibrated, budget, min_delta_bic, opts, log,
                        restart=lambda: _restart_race(res, h0, ranked, calibrated, final,
                                                      h0_cmp, opts, log))
+            _other_places(res, hyps, calibrated, opts, log)
             _join_twins(res, hyps, calibrated, log)
             lead = min(calibrated, key=lambda h: h.bic(n))
             if lead.bic(n) < h0.bic(n) - min_delta_bic:
@@ -341,6 +345,41 @@ def _restart_race(res: Residuals, h0: Hypothesis, ranked: Sequence[Hypothesis],
                        "from a stalled H0")
         log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
         calibrated.append(h)
+
+
+def _other_places(res: Residuals, hyps: Sequence[Hypothesis], calibrated: list[Hypothesis],
+                  opts: dict, log: Log) -> None:
+    """The leader's effect at the other places that were calibrated at every level (with
+    one level, also in the race), started again from the leader's optimum: the same effect
+    has the same parameters, and where the places act alike their optima lie close, while
+    each place's own calibration started from H0's optimum and may have stalled far from it
+    (``bench/recovery.py`` seed 2037: a friction at bearing l3, its calibration stalled at
+    chi2 6982 on the level where its true values give 18, the same friction at bearing l1
+    reached 131 and was named). Each is run at the leader's optimum and, where that beats
+    its own calibration, refined locally from there (DFO-LS, ``6 k + 6`` points); it joins
+    the calibrated, so the verdict compares both places at their optima."""
+    n = res.entries.size()
+    lead = min(calibrated, key=lambda h: h.bic(n))
+    if lead.effect is None:
+        return
+    others = [h for h in hyps if h is not lead and h.effect is not None
+              and h.effect.name == lead.effect.name and h.fit is not None
+              and ("calibrated" in h.screen or h in calibrated)]
+    for h in others:
+        (w,) = res.evaluate(h.effects, [dict(lead.fit.values)],
+                            f"{h.name} at {lead.name}'s optimum")
+        if w is None or float(w @ w) >= h.fit.chi2:
+            continue
+        log(f"  {h.name} again from {lead.name}'s optimum (chi2 {h.fit.chi2:.4g} -> "
+            f"{float(w @ w):.4g} before refining)")
+        fit = calibrate_hypothesis(res, h, 6 * h.k + 6, log=log, **{**opts, **LOCAL_ONLY})
+        if fit.chi2 < h.fit.chi2:
+            h.notes.append(f"calibrated again from {lead.name}'s optimum: chi2 "
+                           f"{h.fit.chi2:.4g} -> {fit.chi2:.4g}")
+            h.fit = fit
+        log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
+        if h not in calibrated:
+            calibrated.append(h)
 
 
 def _join_twins(res: Residuals, hyps: Sequence[Hypothesis], calibrated: list[Hypothesis],
