@@ -81,7 +81,7 @@ def bench_study(name: str, short: bool = False):
 
 
 def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
-             store: Path | None = None) -> dict:
+             store: Path | None = None, from_nominal: float | None = None) -> dict:
     from sensfw.measure import cases, discrepancy
     from sensfw.measure.diagnose import diagnose
     from sensfw.measure.prepared import load_measurements
@@ -93,7 +93,9 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
     with Runner(RunStore(store or tmp / "runs"), backend="processes",
                 workers=workers) as runner:
         local, global_phase = METHODS[method]
-        res = diagnose(study, meas, runner, log=log, local=local, global_phase=global_phase)
+        extra = {} if from_nominal is None else {"from_nominal": from_nominal}
+        res = diagnose(study, meas, runner, log=log, local=local, global_phase=global_phase,
+                       **extra)
         wall = time.perf_counter() - t0
         rows = {r["hypothesis"]: r for r in res.rows}
         n = res.n_entries
@@ -233,6 +235,10 @@ def main() -> None:
                     "not run before: simulations per case stay what the diagnosis asked "
                     "for, its wall time does not")
     ap.add_argument("--verbose", action="store_true")
+    ap.add_argument("--from-nominal", type=float, default=None,
+                    help="diagnose's from_nominal (coded distance of H0's optimum from the "
+                         "nominal values beyond which the first look also starts there; "
+                         "'inf': never, as before stop 39)")
     args = ap.parse_args()
     if args.merge:
         rows = [json.loads(line) for f in args.merge for line in f.read_text().splitlines()
@@ -247,8 +253,10 @@ def main() -> None:
         case = cases.draw(study, args.seed + i, LEVELS[args.study])
         case["study"] = study.name
         r = run_case(study, case, args.method, args.workers,
-                     log=print if args.verbose else (lambda s: None), store=args.store)
+                     log=print if args.verbose else (lambda s: None), store=args.store,
+                     from_nominal=args.from_nominal)
         r["store"] = str(args.store) if args.store else None
+        r["from_nominal"] = args.from_nominal
         truth = f"{case['effect']}@{case['place']}" if case["effect"] else "no effect"
         print(f"case {i} ({truth}; {len(case['levels'])} level(s), noise "
               f"{100 * case['noise']:.1f} %): {r['verdict']} -> {r['outcome']}; true chi2 "

@@ -11,7 +11,8 @@ top-down:
 2. **calibration** (:mod:`.calibration`): H0 globally (design, residual surrogate, DFO-LS;
    without ``global_phase``, Levenberg-Marquardt from the study's values);
    then a screen of the candidates on the level H0 misfits most (:mod:`.screening`: first
-   look, second look, each candidate's surrogate seeded with H0's runs at its neutral
+   look, from H0's optimum and, where H0 moved far from them, from the nominal base
+   values; second look, each candidate's surrogate seeded with H0's runs at its neutral
    values); then the most promising candidates at every level, again seeded with H0's
    runs; H0 is tried again from every calibrated candidate's base values and, if
    that moves its optimum by more than the margin, the race's other calibrated candidates
@@ -96,8 +97,8 @@ def calibrate_hypothesis(res: Residuals, h: Hypothesis, budget: int, *,
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
              candidates: Sequence[str] | None = None, final: int = 2,
              min_delta_bic: float = 10.0, budget: int | None = None, prune: bool = True,
-             local: str = "dfols", global_phase: bool = True, log: Log = lambda s: None
-             ) -> DiagnoseResult:
+             local: str = "dfols", global_phase: bool = True, from_nominal: float = 0.25,
+             log: Log = lambda s: None) -> DiagnoseResult:
     """Diagnose the missing physics (module docstring). ``candidates`` are effect names
     (``NAME`` or ``NAME@PLACE``; default: every registered effect at every place it
     fits); ``budget`` caps the simulations (default :func:`default_budget`); ``final``
@@ -117,7 +118,9 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     every hand-picked case
     (``bench/verdicts.py``'s friction at the clutch's drive side: the local
     search names the crank side, the true candidate stalled at H0's chi2), so the global
-    search stays the default."""
+    search stays the default. ``from_nominal``: how far (coded) H0's optimum must lie from
+    the nominal base values for the screen's first look to start from these too
+    (:func:`~sensfw.measure.screening.screen`; ``math.inf``: never)."""
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
@@ -162,7 +165,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             return fit
 
         ranked = screen(res, h0, hyps, h0_cmp, level, on_level, max(room, len(hyps)),
-                        margin=min_delta_bic, first_only=h0_fits, log=log)
+                        margin=min_delta_bic, first_only=h0_fits,
+                        from_nominal=from_nominal, log=log)
         sl = res.level_slices()[level]
         chi0 = float(np.sum(h0.fit.best.w[sl] ** 2))
         able = [h for h in ranked if h.screen.get("calibrated", math.inf) +
@@ -240,8 +244,9 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
 
 def _around(h0: Hypothesis, h: Hypothesis, half: float = 0.25):
     """The design box of a candidate's calibration: its own axes over their whole range,
-    the base axes ``half`` (coded) either side of H0's optimum."""
-    z0 = h0.fit.z
+    the base axes ``half`` (coded) either side of where its better first look started
+    (H0's optimum or the nominal values, :func:`~sensfw.measure.screening.screen`)."""
+    z0 = np.asarray(h.screen.get("_centre", h0.fit.z), float)
     low = np.concatenate([np.clip(z0 - half, -1, 1), -np.ones(len(h.own))])
     high = np.concatenate([np.clip(z0 + half, -1, 1), np.ones(len(h.own))])
     return low, high

@@ -168,11 +168,13 @@ def write_diagnose_report(study, result, path) -> Path:
     if screened:
         page.p(f"{len(screened)} more candidates were screened on one level only (not "
                "calibrated); best five by their screen's score (chi2 on that level, the "
-               "lower of a run and its linearised joint fit):")
+               "lower of a run and its linearised joint fit, from H0's base values or "
+               "from the nominal ones where H0 moved far from them):")
         best = sorted(screened, key=lambda r: r["screen"].get("score", np.inf))[:5]
         page.table(pd.DataFrame([{"hypothesis": r["hypothesis"],
                                   "first look": r["screen"].get("first_look"),
-                                  "score": r["screen"].get("score")}
+                                  "score": r["screen"].get("score"),
+                                  "looked from": r["screen"].get("looked_from", "H0")}
                                  for r in best]).set_index("hypothesis"))
     fig, ax = plt.subplots(figsize=(10, 3.6))
     x = np.arange(len(rows))
