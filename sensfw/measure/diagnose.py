@@ -29,8 +29,10 @@ hypothesis) and the model-scatter runs (``2 d``) come on top, and so do H0's rem
 before a candidate is credited (at most as many points as the leader spent) and, after a
 refresh of H0, the race's restart (a start per probe and race optimum of each candidate
 calibrated in the race, ``6 k + 6`` points for each of the best ``final``) and the
-leader's effect at its other places (a run and at most ``6 k + 6`` points each), so a diagnosis
-ends within about twice its budget (the suite's preload case: 306 simulations for 200).
+leader's effect at its other places (a run and at most ``6 k + 6`` points each) and the
+screen's first looks from the nominal values (one run per candidate and H0's, where H0's
+optimum moved more than ``from_nominal`` from them), so a diagnosis ends within about
+twice its budget (the suite's preload case: 306 simulations for 200).
 """
 
 from __future__ import annotations
