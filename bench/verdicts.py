@@ -137,8 +137,9 @@ def problems(case: Case, result) -> list[str]:
     out = []
     if result.verdict not in case.expect:
         out.append(f"verdict {result.verdict}: {result.reason}")
-    if nested(result):
-        out.append(f"above H0: {nested(result)}")
+    above = nested(result)
+    if above:
+        out.append(f"above H0: {above}")
     if case.hidden is not None and not (result.errors["best"] is not None and
                                         result.errors["best"] < result.errors["parameters"]):
         out.append(f"best error {result.errors['best']} not below the parameters' "

@@ -30,8 +30,8 @@ before a candidate is credited (at most as many points as the leader spent) and,
 refresh of H0, the race's restart (a start per probe and race optimum of each candidate
 calibrated in the race, ``6 k + 6`` points for each of the best ``final``) and the
 leader's effect at its other places (a run and at most ``6 k + 6`` points each) and the
-screen's first looks from the nominal values (one run per candidate and H0's, where H0's
-optimum moved more than ``from_nominal`` from them), so a diagnosis ends within about
+screen's first looks from the nominal values (one run per candidate, where H0's optimum
+moved more than ``from_nominal`` from them), so a diagnosis ends within about
 twice its budget (the suite's preload case: 306 simulations for 200).
 """
 
@@ -248,7 +248,8 @@ def _around(h0: Hypothesis, h: Hypothesis, half: float = 0.25):
     """The design box of a candidate's calibration: its own axes over their whole range,
     the base axes ``half`` (coded) either side of where its better first look started
     (H0's optimum or the nominal values, :func:`~sensfw.measure.screening.screen`)."""
-    z0 = np.asarray(h.screen.get("_centre", h0.fit.z), float)
+    origin = h.screen.get("_origin")
+    z0 = h0.fit.z if origin is None else origin.z
     low = np.concatenate([np.clip(z0 - half, -1, 1), -np.ones(len(h.own))])
     high = np.concatenate([np.clip(z0 + half, -1, 1), np.ones(len(h.own))])
     return low, high

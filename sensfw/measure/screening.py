@@ -113,10 +113,11 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     alone reach on the level by H0's linearised fit; the others showed nothing an effect
     explains. ``from_nominal``: the coded distance (largest over the base axes) of H0's
     optimum from the nominal values beyond which the first look also starts from these
-    (``math.inf``: never; not with ``first_only``); those runs (one per candidate and
-    H0's) come on top of ``budget``, so the race after them is the same as without. Each
-    candidate's second look and its calibration's design box (``h.screen["_centre"]``)
-    start from where its better first look did."""
+    (``math.inf``: never; not with ``first_only``); those runs (one per candidate, and
+    H0's there unless the nominal model's run is among H0's trials) come on top of
+    ``budget``, so the race after them is the same as without. Each candidate's second
+    look and its calibration's design box (``h.screen["_origin"]``) start from where its
+    better first look did."""
     levels = [level]
     sl = res.level_slices()[level]
     base = h0.fit.values
@@ -156,7 +157,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
                 point = {**h0.coords.decode(origin.z + dz), **_scaled_probe(h, p, c)} \
                     if lin < chi2 else p
                 s["_start"] = {**origin.values, **h.neutral, **point}
-                s["_origin"], s["_centre"] = origin, origin.z
+                s["_origin"] = origin
                 s["looked_from"] = origin.label
 
     # 1. first look: the middle probe from H0's optimum (and from the nominal values)
@@ -164,8 +165,14 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     nominal = {a.name: a.nominal for a in h0.coords.axes}
     zn = h0.coords.code(nominal)
     if not first_only and hyps and float(np.max(np.abs(zn - z0), initial=0.0)) > from_nominal:
-        (wn,) = res.evaluate(None, [nominal], "H0 at the nominal values", levels)
-        on_top[0] += 1
+        # the nominal model's run (diagnosis starts with it) is one of H0's trials
+        known = [t.w for t in res.trials(None, levels)
+                 if all(t.values.get(k) == v for k, v in nominal.items())]
+        if known:
+            wn = known[0]
+        else:
+            (wn,) = res.evaluate(None, [nominal], "H0 at the nominal values", levels)
+            on_top[0] += 1
         if wn is not None:
             origins.append(_Origin("nominal", nominal, wn, zn))
             log(f"  H0's optimum is {float(np.max(np.abs(zn - z0))):.2f} (coded) from the "
@@ -248,7 +255,7 @@ def _drop_scratch(hyps: Sequence[Hypothesis]) -> None:
     """Remove what only the race needs (start points, first-look residuals) from
     ``h.screen``, which the rows and the report keep."""
     for h in hyps:
-        for key in ("_start", "_w", "_origin", "_centre"):
+        for key in ("_start", "_w", "_origin"):
             h.screen.pop(key, None)
 
 
