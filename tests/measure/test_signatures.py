@@ -229,9 +229,17 @@ def test_allows_prunes_by_declared_classes_and_never_without_evidence():
     assert all(allows(e, {}) for e in ("friction", "added_mass", "clearance", Unknown))
     soft = {"softening": {}}
     assert allows("friction", soft) and allows("clearance", soft)
+    # a play the measured levels never cross changes the model linearly
+    assert allows("clearance", {"amplitude_independent": {}})
     assert not allows("added_mass", soft) and not allows("preload", soft)
     assert allows(Unknown, soft) and allows(Unknown(), soft)
-    assert allows("flexible_mode", {"new_peak": {}}) and not allows("damping", {"new_peak": {}})
+    # a new peak speaks for an extra mode, but alone it rules nothing out (a resonance
+    # moved past the pairing tolerance looks the same); beside another class it lets the
+    # extra mode in and the other class prunes
+    assert allows("flexible_mode", {"new_peak": {}}) and allows("damping", {"new_peak": {}})
+    both = {"new_peak": {}, "softening": {}}
+    assert allows("flexible_mode", both) and allows("friction", both)
+    assert not allows("damping", both) and not allows("added_mass", both)
 
 
 def test_noise_estimates_of_a_linear_record():
