@@ -17,7 +17,8 @@ top-down:
    runs; H0 is tried again from every calibrated candidate's base values and, if
    that moves its optimum by more than the margin, the race's other calibrated candidates
    start again from there; the leader's effect at its other calibrated places starts
-   again from the leader's optimum (:func:`_other_places`); places whose first looks were
+   again from the leader's optimum, and at the places never calibrated is run there and
+   refined where one beats the leader (:func:`_other_places`); places whose first looks were
    a calibrated candidate's to round-off are run at its optimum and join it where they tie
    (:func:`_join_twins`);
 3. **ranking** (:mod:`.ranking`): BIC, held-out levels, ties and trades, the verdict.
@@ -29,7 +30,8 @@ hypothesis) and the model-scatter runs (``2 d``) come on top, and so do H0's rem
 before a candidate is credited (at most as many points as the leader spent) and, after a
 refresh of H0, the race's restart (a start per probe and race optimum of each candidate
 calibrated in the race, ``6 k + 6`` points for each of the best ``final``) and the
-leader's effect at its other places (a run and at most ``6 k + 6`` points each) and the
+leader's effect at its other places (a run and at most ``6 k + 6`` points each; at the
+places never calibrated a run each, ``6 k + 6`` points for at most ``final`` of them) and the
 screen's first looks from the nominal values (one run per candidate, where H0's optimum
 moved more than ``from_nominal`` from them), so a diagnosis ends within about
 twice its budget (the suite's preload case: 306 simulations for 200).
@@ -108,9 +110,10 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     calibrated at every level; ``prune=False`` races every candidate, also those whose
     signature classes the levels do not show (the classes are read off the model
     calibrated without any effect, and where that fit is poor they can miss the truth's
-    class: a hardening at the slide bearing read as a new peak, ``bench/recovery.py`` seed
-    2031; but racing all 50 candidates of the quick study spreads the budget so thin that
-    seeds 2025 and 2029, right when pruned, were missed); ``local`` is
+    class: a new peak alone, which a resonance moved past pairing also leaves, no longer
+    prunes, :func:`~sensfw.measure.signatures.allows`; but racing all 50 candidates of the
+    quick study spreads the budget so thin that seeds 2025 and 2029, right when pruned,
+    were missed); ``local`` is
     the local least-squares method (``"dfols"`` or ``"lm"``,
     :mod:`.calibration.refine`); ``global_phase=False`` leaves out the design and the
     surrogate search (Levenberg-Marquardt from the start values, ``local="lm"``:

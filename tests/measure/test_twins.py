@@ -55,3 +55,45 @@ def test_a_twin_joins_the_calibrated_candidate_only_where_it_ties():
     assert twin.fit.values == lead.fit.values and twin.fit.chi2 == lead.fit.chi2
     assert other.fit is None
     assert sorted(p for p, _ in res.calls) == ["bearing_l3_shoulder", "driveshaft"]
+
+
+def test_the_leaders_effect_at_places_never_calibrated(monkeypatch):
+    """Every place the race never calibrated is run at the leader's optimum; places whose
+    runs agree to round-off are one group; the best ``final`` groups that beat the leader
+    there are refined (one place each) and the group's other places join where they tie."""
+    import sensfw.measure.diagnose as diagnose
+
+    lead, *others = (hypothesis("damping", p) for p in (
+        "bearing_l1", "bearing_l3", "bearing_l3_shoulder", "flange", "clutch", "driveshaft"))
+    raced = hypothesis("damping", "crankshaft")
+    raced.screen["calibrated"] = 30.0  # calibrated in the race: not this step's
+    lead.fit = Fit(lead.coords, Trial({"extra_damping": 0.2}, np.full(3, 3.0)), None)  # 27
+    at_lead = {"bearing_l3": 2.0, "bearing_l3_shoulder": 2.0, "flange": 2.5, "clutch": 2.9,
+               "driveshaft": 4.0}  # chi2 12, 12, 18.75, 25.2, 48
+    refined = np.full(3, 1.0)  # chi2 3 after the refinement
+
+    class Res:
+        def __init__(self):
+            self.calls = []
+
+        def evaluate(self, specs, points, label, levels=None):
+            place = specs[0]["attach"]
+            self.calls.append((place, label))
+            at_refined = "optimum" in label and "bearing_l1" not in label
+            return [refined.copy() if at_refined else np.full(3, at_lead[place])]
+
+    def calibrate(res, h, budget, **kw):
+        return Fit(h.coords, Trial({"extra_damping": 0.3}, refined.copy()), None)
+
+    monkeypatch.setattr(diagnose, "calibrate_hypothesis", calibrate)
+    res, calibrated = Res(), [lead]
+    diagnose._places_never_calibrated(res, [lead, raced, *others], lead, calibrated, 2, {},
+                                      log=lambda s: None)
+    names = [h.place for h in calibrated]
+    # bearing_l3 refined, its twin joined at its optimum, flange refined (second group);
+    # clutch beat the leader but is third, driveshaft did not
+    assert names == ["bearing_l1", "bearing_l3", "bearing_l3_shoulder", "flange"]
+    assert calibrated[2].fit.values == calibrated[1].fit.values
+    runs = [p for p, label in res.calls if label.endswith("damping@bearing_l1's optimum")]
+    assert sorted(runs) == sorted(at_lead)  # one run each, the raced place not again
+    assert all(h.fit is None for h in others if h not in calibrated)
