@@ -97,3 +97,41 @@ def test_the_leaders_effect_at_places_never_calibrated(monkeypatch):
     runs = [p for p, label in res.calls if label.endswith("damping@bearing_l1's optimum")]
     assert sorted(runs) == sorted(at_lead)  # one run each, the raced place not again
     assert all(h.fit is None for h in others if h not in calibrated)
+
+
+def test_the_runner_up_is_refined_only_where_it_stopped_on_its_budget(monkeypatch):
+    """The best calibrated candidate after the leader is refined further where its
+    DFO-LS ended on its evaluation budget short of the noise, never otherwise."""
+    import sensfw.measure.diagnose as diagnose
+
+    n = 40
+    lead, second, third = (hypothesis("damping", p)
+                           for p in ("bearing_l1", "bearing_l3", "flange"))
+    calls = []
+
+    def calibrate(res, h, budget, **kw):
+        calls.append((h.place, budget))
+        return Fit(h.coords, Trial({"extra_damping": 0.3}, np.ones(n)), None)
+
+    monkeypatch.setattr(diagnose, "calibrate_hypothesis", calibrate)
+
+    class Res:
+        class entries:
+            @staticmethod
+            def size():
+                return n
+
+    def setup(message, scale, lead_scale=1.5):
+        for h, s in ((lead, lead_scale), (second, scale), (third, 20.0)):
+            h.fit = Fit(h.coords, Trial({"extra_damping": 0.2}, np.full(n, s)), None,
+                        info={"refinement": [{"nf": 11, "message": message}]})
+        calls.clear()
+        diagnose._finish_runner_up(Res(), [third, lead, second], {}, log=lambda s: None)
+
+    setup("Warning (max evals): Objective has been called MAXFUN times", 3.0)
+    assert calls == [("bearing_l3", 6 * second.k + 6)]  # the runner-up only
+    assert second.fit.chi2 == n and "refined further" in second.notes[-1]
+    setup("Success: rho has reached rhoend", 3.0)  # converged: its optimum
+    assert calls == []
+    setup("Warning (max evals): Objective has been called MAXFUN times", 1.0, 0.9)
+    assert calls == []  # at the noise already
