@@ -474,10 +474,21 @@ def _places_never_calibrated(res: Residuals, hyps: Sequence[Hypothesis], lead: H
         for t in twins:
             (w,) = res.evaluate(t.effects, [h.fit.values], f"{t.name} at {h.name}'s optimum")
             if w is not None and float(w @ w) - h.fit.chi2 <= TIE_BIC:
-                t.fit = Fit(t.coords, Trial(dict(h.fit.values), w), None)
+                t.fit = _twin_fit(t, h, w)
                 t.notes.append(f"at {h.name}'s optimum chi2 {float(w @ w):.4g} "
                                f"({h.fit.chi2:.4g}): the channels cannot tell them apart")
                 calibrated.append(t)
+
+
+def _twin_fit(t: Hypothesis, h: Hypothesis, w: np.ndarray) -> Fit:
+    """``t``'s fit at ``h``'s optimum, where it ran with residuals ``w``: where these agree
+    with ``h``'s to round-off the two places act alike there, and ``h``'s Jacobian (so its
+    intervals) and search record stand for both; otherwise no Jacobian (the intervals
+    unknown)."""
+    same = float(np.max(np.abs(w - h.fit.best.w))) <= \
+        1e-9 * max(float(np.max(np.abs(w))), 1.0)
+    return Fit(t.coords, Trial(dict(h.fit.values), w), h.fit.jacobian if same else None,
+               info={**h.fit.info, "twin_of": h.name})
 
 
 def _join_twins(res: Residuals, hyps: Sequence[Hypothesis], calibrated: list[Hypothesis],
@@ -498,7 +509,7 @@ def _join_twins(res: Residuals, hyps: Sequence[Hypothesis], calibrated: list[Hyp
             log(f"  {t.name} (its first look was {h.name}'s) at {h.name}'s optimum: chi2 "
                 f"{chi2:.4g} against {h.fit.chi2:.4g}")
             if chi2 - h.fit.chi2 <= TIE_BIC:
-                t.fit = Fit(t.coords, Trial(dict(h.fit.values), w), None)
+                t.fit = _twin_fit(t, h, w)
                 t.notes.append(f"its first look was {h.name}'s to round-off; at that one's "
                                f"optimum chi2 {chi2:.4g} ({h.fit.chi2:.4g})")
                 calibrated.append(t)

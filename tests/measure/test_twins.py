@@ -45,7 +45,8 @@ def test_a_twin_joins_the_calibrated_candidate_only_where_it_ties():
     lead, twin, other = (hypothesis("damping", p)
                          for p in ("bearing_l3", "driveshaft", "bearing_l3_shoulder"))
     w = np.array([1.0, 2.0, -1.0])
-    lead.fit = Fit(lead.coords, Trial({"extra_damping": 0.2}, w), None)
+    J = np.arange(3.0)[:, None]
+    lead.fit = Fit(lead.coords, Trial({"extra_damping": 0.2}, w), J)
     twin.screen["twin"] = other.screen["twin"] = lead.name
     worse = np.sqrt(w**2 + (TIE_BIC + 1.0) / len(w))  # chi2 larger by the tie + 1
     res = _Residuals(w, {"driveshaft": w.copy(), "bearing_l3_shoulder": worse})
@@ -53,6 +54,8 @@ def test_a_twin_joins_the_calibrated_candidate_only_where_it_ties():
     _join_twins(res, [lead, twin, other], calibrated, log=lambda s: None)
     assert calibrated == [lead, twin]
     assert twin.fit.values == lead.fit.values and twin.fit.chi2 == lead.fit.chi2
+    # the same residuals to round-off: the lead's Jacobian (its intervals) stands for both
+    assert twin.fit.jacobian is J and twin.fit.info["twin_of"] == lead.name
     assert other.fit is None
     assert sorted(p for p, _ in res.calls) == ["bearing_l3_shoulder", "driveshaft"]
 
