@@ -26,8 +26,6 @@ import importlib.util  # noqa: E402
 import math  # noqa: E402
 import tempfile  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 BENCH = Path(__file__).resolve().parent
 
 
@@ -50,7 +48,7 @@ def ranks(seed: int, store: Path | None, workers: int = 2,
     import sensfw.measure.diagnose as diagnose
     from sensfw.measure import cases
     from sensfw.measure.prepared import load_measurements
-    from sensfw.measure.screening import _linearised
+    from sensfw.measure.screening import _linearised, look_origins
     from sensfw.runs import Runner, RunStore
 
     rec = _recovery()
@@ -62,26 +60,17 @@ def ranks(seed: int, store: Path | None, workers: int = 2,
     scores: dict[str, dict[str, float]] = {"middle": {}, "all": {}}
 
     def screen(res, h0, hyps, h0_cmp, level, calibrate_on, budget, **kw):
-        sl = res.level_slices()[level]
-        w0, J0 = h0.fit.best.w[sl], h0.fit.jacobian[sl]
-        z0 = h0.coords.code(h0.fit.values)
-        origins = [(h0.fit.values, w0, z0)]
-        nominal = {a.name: a.nominal for a in h0.coords.axes}
-        zn = h0.coords.code(nominal)
-        if float(np.max(np.abs(zn - z0), initial=0.0)) > kw.get("from_nominal", from_nominal):
-            known = [t.w for t in res.trials(None, [level])
-                     if all(t.values.get(k) == v for k, v in nominal.items())]
-            if known:
-                origins.append((nominal, known[0], zn))
+        J0 = h0.fit.jacobian[res.level_slices()[level]]
+        origins = look_origins(res, h0, level, kw.get("from_nominal", from_nominal))
         for h in hyps:
             probes = h.effect.probes(h0_cmp)
-            for values, w_o, z_o in origins:
-                ws = res.evaluate(h.effects, [{**values, **h.neutral, **p} for p in probes],
+            for o in origins:
+                ws = res.evaluate(h.effects, [{**o.values, **h.neutral, **p} for p in probes],
                                   f"first look {h.name}", [level])
                 for i, w in enumerate(ws):
                     if w is None:
                         continue
-                    s = min(float(w @ w), _linearised(w_o, J0, w - w_o, z_o)[0])
+                    s = min(float(w @ w), _linearised(o.w, J0, w - o.w, o.z)[0])
                     for key in ("all",) + (("middle",) if i == len(probes) // 2 else ()):
                         scores[key][h.name] = min(scores[key].get(h.name, math.inf), s)
         raise _Stop

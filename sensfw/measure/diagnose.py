@@ -57,7 +57,7 @@ from .io import Measurement
 from .ranking import TIE_BIC, heldout, verdict
 from .residuals import Residuals
 from .scatter import widen_for_roughness
-from .screening import screen, screening_level
+from .screening import same_to_round_off, screen, screening_level
 
 #: how many of a calibrated candidate's best runs H0 is tried at (see :func:`_refresh_h0`)
 REFRESH_POINTS = 4
@@ -453,8 +453,7 @@ def _places_never_calibrated(res: Residuals, hyps: Sequence[Hypothesis], lead: H
                             f"{h.name} at {lead.name}'s optimum")
         if w is None:
             continue
-        same = next((g for g in groups if float(np.max(np.abs(g[1] - w))) <=
-                     1e-9 * max(float(np.max(np.abs(w))), 1.0)), None)
+        same = next((g for g in groups if same_to_round_off(w, g[1])), None)
         if same is None:
             groups.append((float(w @ w), w, [h]))
         else:
@@ -485,8 +484,7 @@ def _twin_fit(t: Hypothesis, h: Hypothesis, w: np.ndarray) -> Fit:
     with ``h``'s to round-off the two places act alike there, and ``h``'s Jacobian (so its
     intervals) and search record stand for both; otherwise no Jacobian (the intervals
     unknown)."""
-    same = float(np.max(np.abs(w - h.fit.best.w))) <= \
-        1e-9 * max(float(np.max(np.abs(w))), 1.0)
+    same = same_to_round_off(w, h.fit.best.w)
     return Fit(t.coords, Trial(dict(h.fit.values), w), h.fit.jacobian if same else None,
                info={**h.fit.info, "twin_of": h.name})
 

@@ -64,6 +64,30 @@ class _Origin:
     z: np.ndarray
 
 
+def look_origins(res: Residuals, h0: Hypothesis, level: int, from_nominal: float,
+                 log: Log = lambda s: None) -> list[_Origin]:
+    """Where the first looks on ``level`` start: H0's optimum and, where that lies more
+    than ``from_nominal`` (coded, any base axis) from the nominal base values, these too
+    (:func:`screen`). H0 at the nominal values is the nominal model's run the diagnosis
+    starts with, found among H0's trials (run only if missing)."""
+    sl = res.level_slices()[level]
+    z0 = h0.coords.code(h0.fit.values)
+    origins = [_Origin("H0", h0.fit.values, h0.fit.best.w[sl], z0)]
+    nominal = {a.name: a.nominal for a in h0.coords.axes}
+    zn = h0.coords.code(nominal)
+    far = float(np.max(np.abs(zn - z0), initial=0.0))
+    if far <= from_nominal:
+        return origins
+    known = [t.w for t in res.trials(None, [level])
+             if all(t.values.get(k) == v for k, v in nominal.items())]
+    (wn,) = known[:1] or res.evaluate(None, [nominal], "H0 at the nominal values", [level])
+    if wn is not None:
+        origins.append(_Origin("nominal", nominal, wn, zn))
+        log(f"  H0's optimum is {far:.2f} (coded) from the nominal values (chi2 "
+            f"{float(wn @ wn):.4g} there): the first look also starts from these")
+    return origins
+
+
 def screening_level(res: Residuals, h0: Hypothesis) -> int:
     """The level where H0 leaves the most chi2 per entry: where a missing effect shows."""
     w = h0.fit.best.w
@@ -120,10 +144,9 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     better first look did."""
     levels = [level]
     sl = res.level_slices()[level]
-    base = h0.fit.values
     w0 = h0.fit.best.w[sl]
     J0 = None if h0.fit.jacobian is None else h0.fit.jacobian[sl]
-    z0 = h0.coords.code(base)
+    z0 = h0.coords.code(h0.fit.values)
     chi0 = float(w0 @ w0)
     spent0 = res.n_simulations
 
@@ -161,23 +184,10 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
                 s["looked_from"] = origin.label
 
     # 1. first look: the middle probe from H0's optimum (and from the nominal values)
-    origins = [_Origin("H0", base, w0, z0)]
-    nominal = {a.name: a.nominal for a in h0.coords.axes}
-    zn = h0.coords.code(nominal)
-    if not first_only and hyps and float(np.max(np.abs(zn - z0), initial=0.0)) > from_nominal:
-        # the nominal model's run (diagnosis starts with it) is one of H0's trials
-        known = [t.w for t in res.trials(None, levels)
-                 if all(t.values.get(k) == v for k, v in nominal.items())]
-        if known:
-            wn = known[0]
-        else:
-            (wn,) = res.evaluate(None, [nominal], "H0 at the nominal values", levels)
-            on_top[0] += 1
-        if wn is not None:
-            origins.append(_Origin("nominal", nominal, wn, zn))
-            log(f"  H0's optimum is {float(np.max(np.abs(zn - z0))):.2f} (coded) from the "
-                f"nominal values (chi2 {float(wn @ wn):.4g} there): the first look also "
-                "starts from these")
+    before = res.n_simulations
+    origins = look_origins(res, h0, level, from_nominal if not first_only and hyps
+                           else math.inf, log)
+    on_top[0] += res.n_simulations - before
     for h in hyps:
         h.screen = {}
         probes = h.effect.probes(h0_cmp)
@@ -271,12 +281,18 @@ def least_shares(finalists: Sequence[Hypothesis], left: int, lead_least: int) ->
     return least
 
 
+def same_to_round_off(a: np.ndarray, b: np.ndarray) -> bool:
+    """Residual vectors equal to round-off (relative to ``a``'s largest entry): runs of two
+    places the channels cannot tell apart."""
+    return float(np.max(np.abs(a - b))) <= 1e-9 * max(float(np.max(np.abs(a))), 1.0)
+
+
 def _same_look(a: Hypothesis, b: Hypothesis) -> bool:
     """The same effect, and first looks that agree to round-off: the level does not tell
     the two places apart (the same body, or a connector between the same two)."""
     wa, wb = a.screen.get("_w"), b.screen.get("_w")
     return (a.effect.name == b.effect.name and wa is not None and wb is not None
-            and float(np.max(np.abs(wa - wb))) <= 1e-9 * max(float(np.max(np.abs(wa))), 1.0))
+            and same_to_round_off(wa, wb))
 
 
 def _predict(res: Residuals, h: Hypothesis, levels: list[int]) -> None:
