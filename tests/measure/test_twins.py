@@ -3,6 +3,7 @@ sensfw/measure/diagnose.py): candidates of one effect whose first looks agree to
 share one second look, and join the calibrated one where they tie at its optimum."""
 
 import numpy as np
+import pytest
 
 from sensfw.measure.calibration import Coordinates, Fit, Trial
 from sensfw.measure.diagnose import _join_twins
@@ -138,3 +139,69 @@ def test_the_runner_up_is_refined_only_where_it_stopped_on_its_budget(monkeypatc
     assert calls == []
     setup("Warning (max evals): Objective has been called MAXFUN times", 1.0, 0.9)
     assert calls == []  # at the noise already
+    for h in (lead, second):  # the budget ended before a local least squares ran
+        h.fit.info["refinement"] = []
+    second.fit.best = Trial({"extra_damping": 0.2}, np.full(n, 3.0))
+    diagnose._finish_runner_up(Res(), [lead, second], {}, log=lambda s: None)
+    assert calls == [("bearing_l3", 6 * second.k + 6)]
+
+
+def test_the_named_are_refined_while_they_stop_on_their_budget(monkeypatch):
+    """The leader and those within the tie of it are refined further, a round at a time
+    (``4 (k + 1)`` points), while their DFO-LS ends on its evaluation budget short of the
+    noise and a round gains 5 %; at most ``POLISH_ROUNDS`` rounds; a candidate beyond
+    the tie is left alone; a twin joined to a refined place is run at its new optimum."""
+    import sensfw.measure.diagnose as diagnose
+
+    n = 40
+    maxed = [{"nf": 11, "message": "Warning (max evals): Objective has been called MAXFUN"}]
+    lead, tied, third, twin = (hypothesis("damping", p) for p in
+                               ("bearing_l1", "bearing_l3", "flange", "driveshaft"))
+    calls = []
+    chi2_next = {}
+
+    def calibrate(res, h, budget, **kw):
+        calls.append((h.place, budget))
+        chi2 = chi2_next[h.place].pop(0)
+        return Fit(h.coords, Trial({"extra_damping": 0.3 + len(calls) / 100},
+                                   np.full(n, np.sqrt(chi2 / n))), None,
+                   info={"refinement": maxed})
+
+    monkeypatch.setattr(diagnose, "calibrate_hypothesis", calibrate)
+
+    class Res:
+        class entries:
+            @staticmethod
+            def size():
+                return n
+
+        def __init__(self):
+            self.runs = []
+
+        def evaluate(self, specs, points, label, levels=None):
+            self.runs.append((specs[0]["attach"], dict(points[0])))
+            return [np.full(n, np.sqrt(100.0 / n))]  # the twin ties at 100
+
+    def fit(h, chi2, message=maxed):
+        h.fit = Fit(h.coords, Trial({"extra_damping": 0.2}, np.full(n, np.sqrt(chi2 / n))),
+                    None, info={"refinement": message})
+
+    fit(lead, 1000.0)
+    fit(tied, 1001.0)
+    fit(third, 1100.0)
+    twin.fit = diagnose._twin_fit(twin, lead, lead.fit.best.w)
+    # the leader gains every round: three rounds; the tied one gains 2 %: one round
+    chi2_next.update(bearing_l1=[500.0, 200.0, 100.0, 50.0], bearing_l3=[980.0, 900.0])
+    res = Res()
+    diagnose._polish_named(res, [third, lead, tied, twin], {}, log=lambda s: None)
+    budget = 4 * (lead.k + 1)
+    assert calls == [("bearing_l1", budget)] * 3 + [("bearing_l3", budget)]
+    assert [h.fit.chi2 for h in (lead, tied, third)] == pytest.approx([100.0, 980.0, 1100.0])
+    assert res.runs == [("driveshaft", lead.fit.values)]
+    assert twin.fit.values == lead.fit.values and twin.fit.info["twin_of"] == lead.name
+
+    calls.clear()  # converged, or at the noise: its optimum, nothing to refine
+    fit(lead, 1000.0, [{"nf": 9, "message": "Success: rho has reached rhoend"}])
+    fit(tied, float(n), maxed)
+    diagnose._polish_named(Res(), [lead, tied], {}, log=lambda s: None)
+    assert calls == []
