@@ -116,7 +116,8 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
            "chi2_true_calibrated": chi2_true_cal,
            "noise_reached": chi2_true_cal / n <= 1 + 3 * math.sqrt(2 / n),
            "truth_fits_noise": discrepancy.fits(w, k_true) if w is not None else False,
-           "simulations": res.n_simulations, "wall_s": wall, **where}
+           "simulations": res.n_simulations, "by_step": res.simulations_by_step,
+           "wall_s": wall, **where}
     return judged(row)
 
 
@@ -213,6 +214,12 @@ def summary(rows: list[dict]) -> None:
                                   f"240 s), max {max(wall):.0f} s" if wall else "")
               + (f" ({len(rs) - len(wall)} case(s) with a shared run store: wall not "
                  "counted)" if len(wall) < len(rs) else ""))
+        steps = [r["by_step"] for r in rs if r.get("by_step")]
+        if steps:  # where they go: the mean per case of each step's simulations
+            names = sorted({k for s in steps for k in s}, key=lambda k: -sum(
+                s.get(k, 0) for s in steps))
+            print("    by step (mean per case): " + ", ".join(
+                f"{k} {sum(s.get(k, 0) for s in steps) / len(steps):.0f}" for k in names))
 
 
 def main() -> None:

@@ -142,6 +142,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     opts = {"q": q, "local": local} if global_phase else \
         {"q": q, "local": local, **LOCAL_ONLY}
     base = Coordinates.of(space)
+    res.step = "H0"
     _, nominal_cmp = res.nominal("; nothing to compare (see the run store)")
     n = res.entries.size()
 
@@ -149,7 +150,9 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     log(f"H0: calibrating {', '.join(names)} ({source}), {budget} simulations in all")
     h0 = Hypothesis(None, "", base)
     h0.fit = calibrate_hypothesis(res, h0, int(0.3 * budget) // n_levels, log=log, **opts)
+    res.step = "model scatter"
     rough = widen_for_roughness(res, h0.fit, log)
+    res.step = "H0"
     (h0_all,) = res.comparisons(None, [h0.fit.values], "H0")
     h0_cmp = res.output_comparisons(h0_all)
     log(f"H0: chi2 {h0.fit.chi2:.4g} for {n} entries")
@@ -178,6 +181,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
                 h.fit = fit
             return fit
 
+        res.step = "screen"
         ranked = screen(res, h0, hyps, h0_cmp, level, on_level, max(room, len(hyps)),
                         margin=min_delta_bic, first_only=h0_fits,
                         from_nominal=from_nominal, log=log)
@@ -195,6 +199,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             log(f"no candidate cleared the margin on level {level + 1}: {ranked[0].name}, "
                 "the best of the race, at every level with what the budget leaves")
             chosen = ranked[:1]
+        res.step = "finalists"
         for i, h in enumerate(chosen):
             if n_levels > 1:
                 left = (budget - res.n_simulations) // n_levels
@@ -215,6 +220,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             _settle_h0(res, h0, calibrated, budget, min_delta_bic, opts, log,
                        restart=lambda: _restart_race(res, h0, ranked, calibrated, final,
                                                      h0_cmp, opts, log))
+            res.step = "other places"
             _other_places(res, hyps, calibrated, opts, log, h0.bic(n), min_delta_bic, final)
             _join_twins(res, hyps, calibrated, log)
             lead = min(calibrated, key=lambda h: h.bic(n))
@@ -222,29 +228,34 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
                 # the model's scatter where the leader ended: what it gained within that
                 # scatter is no evidence (a stick-slip response can fit one noisy record
                 # by chance at one point and nowhere next to it)
+                res.step = "model scatter"
                 rough = widen_for_roughness(
                     res, lead.fit, log, lead.effects, already=rough,
                     fits=[h0.fit, *(h.fit for h in calibrated if h is not lead)])
                 log(f"  {lead.name}: chi2 {lead.fit.chi2:.4g}, H0 {h0.fit.chi2:.4g} with "
                     "the leader's scatter")
+                res.step = "named refined"
                 _polish_named(res, calibrated, opts, log)
             _nest(h0, calibrated)  # twins joined, and the wider scatter weighs fits anew
     for h in hyps:  # not calibrated: at its neutral values the candidate is H0
         if h.fit is None or h not in calibrated:
             h.fit = Fit(h.coords, Trial({**h0.fit.values, **h.neutral}, h0.fit.best.w), None)
             h.notes.append("screened only (at its neutral values: H0)")
+    res.step = "held-out"
     if n_levels >= 2:
         for h in [h0, *calibrated]:
             h.heldout = heldout(res, h)
     text, reason, named = verdict(h0, calibrated, n, min_delta_bic, n_levels)
     rows = [h0.row(n, None)] + [h.row(n, h0) for h in sorted(hyps, key=lambda h: h.fit.chi2)]
     best_all = None
+    res.step = "report"
     if named:
         (best_all,) = res.comparisons(named[0].effects, [named[0].fit.values], "winner")
     return DiagnoseResult(
         verdict=text, named=[h.name for h in named], reason=reason, variables=names,
         variables_from=source, channels=res.channels, rows=rows,
-        n_simulations=res.n_simulations, n_entries=n, signature_classes=found,
+        n_simulations=res.n_simulations, simulations_by_step=dict(res.spent), n_entries=n,
+        signature_classes=found,
         nominal=res.output_comparisons(nominal_cmp), calibrated=h0_cmp,
         best=res.output_comparisons(best_all),
         errors={"nominal": res.rms_db(nominal_cmp), "parameters": res.rms_db(h0_all),
@@ -280,13 +291,17 @@ def _settle_h0(res: Residuals, h0: Hypothesis, calibrated: list[Hypothesis], bud
     at its neutral values (where it is H0)."""
     n = res.entries.size()
     lead = min(calibrated, key=lambda h: h.bic(n))
+    res.step = "leader"
     _spend_the_rest(res, lead, budget, opts, log)
     before = h0.fit.chi2
+    res.step = "H0 refreshed"
     _refresh_h0(res, h0, calibrated, opts, log)
     if h0.fit.chi2 < before - margin:
         restart()
+    res.step = "runner-up"
     _finish_runner_up(res, calibrated, opts, log)
     lead = min(calibrated, key=lambda h: h.bic(n))
+    res.step = "H0 rematch"
     if lead.bic(n) < h0.bic(n) - margin:
         _rematch_h0(res, h0, lead, opts, log)
     _nest(h0, calibrated)
@@ -642,6 +657,8 @@ class DiagnoseResult:
     channels: list[str]
     rows: list[dict]
     n_simulations: int
+    #: step of the method -> the simulations it asked for (one per point and level)
+    simulations_by_step: dict
     n_entries: int
     signature_classes: dict
     nominal: list
@@ -662,7 +679,8 @@ class DiagnoseResult:
                 "calibration_variables_from": self.variables_from,
                 "channels": self.channels,
                 "parameters_only": self.rows[0], "ranking": self.ranking,
-                "n_simulations": self.n_simulations, "n_entries": self.n_entries,
+                "n_simulations": self.n_simulations,
+                "simulations_by_step": self.simulations_by_step, "n_entries": self.n_entries,
                 "signature_classes": self.signature_classes, "errors_db": self.errors,
                 "criteria": self.criteria,
                 "comparison": {"nominal": [c.to_dict() for c in self.nominal],

@@ -64,6 +64,10 @@ class Residuals:
         ex = study.excitation
         self.band = (ex.f0, ex.f1)
         self.n_simulations = 0
+        #: the step of the caller's method the next simulations count for (``spent``)
+        self.step = "start"
+        #: step -> simulations (one per point and level) it asked for, cached or not
+        self.spent: dict[str, int] = {}
         self.entries: discrepancy.Entries | None = None
         #: label of the batch -> the reason of its last failed run (the run store's)
         self.failures: dict[str, str] = {}
@@ -94,6 +98,7 @@ class Residuals:
                               effects or ()) for p in points for i in idx]
         signals, errors = simulate(self.runner, specs, label)
         self.n_simulations += len(specs)
+        self.spent[self.step] = self.spent.get(self.step, 0) + len(specs)
         failed = [e for e in errors if e is not None]
         if failed:
             self.failures[label] = failed[-1]

@@ -184,6 +184,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
                 s["looked_from"] = origin.label
 
     # 1. first look: the middle probe from H0's optimum (and from the nominal values)
+    res.step = "first look"
     before = res.n_simulations
     origins = look_origins(res, h0, level, from_nominal if not first_only and hyps
                            else math.inf, log)
@@ -208,6 +209,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     # first looks, of as many as the budget allows beside one calibration on the level
     # (at least ``min_second``); a candidate whose first look is another's of the same
     # effect (places the level cannot tell apart) shares that one's second look
+    res.step = "second look"
     second, looked = [], []
     for h in ranked:
         if not math.isfinite(h.screen["first_look"]):
@@ -240,6 +242,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     # there) by the verdict's margin
     finalists = [h for i, h in enumerate(second[:keep])
                  if i == 0 or h.screen["score"] < chi0_lin - margin]
+    res.step = "race calibrations"
     least = least_shares(finalists, left(), 6 * (h0.k + 1))
     for h in finalists[len(least):]:
         h.notes.append("not calibrated on the screening level: the budget was spent on "

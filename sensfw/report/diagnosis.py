@@ -119,6 +119,10 @@ def write_diagnose_report(study, result, path) -> Path:
                 f"verdict: {result.verdict} — {result.n_simulations} simulations")
     page.p(f"Verdict: {result.verdict}: {result.reason}.", "ok" if result.verdict != "none"
            else "note")
+    if result.simulations_by_step:
+        page.p(f"Simulations ({result.n_simulations}, one per point and level, stored runs "
+               "included) by step: " + ", ".join(
+                   f"{k} {v}" for k, v in result.simulations_by_step.items()) + ".")
     page.p("Every hypothesis recalibrates the base parameters "
            f"({', '.join(result.variables)}, from {result.variables_from}): 'parameters' "
            "recalibrates them alone; each candidate effect is calibrated jointly with them. "
@@ -128,7 +132,8 @@ def write_diagnose_report(study, result, path) -> Path:
            "first look from the recalibrated base values and, where these moved far from "
            "the nominal ones, from the nominal ones too), the best calibrated there and "
            "the finalists at every level; the leading effect is then tried at its other "
-           "places from its optimum. The residuals are the dB "
+           "places from its optimum, and what the verdict names is refined further "
+           "where its search stopped on its budget short of the noise. The residuals are the dB "
            "differences per one-third-octave band (and THD) divided by their standard "
            "errors from the measurement's own noise; chi2 is their sum of squares, BIC = "
            "chi2 + k ln n. With several levels each is also judged on levels it was not "

@@ -74,6 +74,10 @@ def test_offsets_without_an_effect_give_parameters_and_recover_them(study, runne
         assert values[name]["value"] == pytest.approx(truth, rel=0.15), values[name]
     assert res.errors["parameters"] < 0.5 * res.errors["nominal"]
     check_nested(res)
+    # every simulation is counted against one step of the method, H0's calibration and
+    # the screen's first look among them
+    assert sum(res.simulations_by_step.values()) == res.n_simulations
+    assert {"H0", "first look"} <= set(res.simulations_by_step)
 
 
 SUITE = [c for c in VERDICTS.CASES if c.suite]
@@ -115,6 +119,7 @@ def test_cli_diagnose_and_augment_write_the_calibrated_study(study, cli, tmp_pat
     assert winner["heldout_chi2_per_entry"] < diag["parameters_only"]["heldout_chi2_per_entry"]
     html = (tmp_path / "d" / "report.html").read_text()
     assert "data:image/png;base64" in html and "held-out" in html
+    assert sum(diag["simulations_by_step"].values()) == diag["n_simulations"]
     proc = cli("augment", study_file, *files, "--effect", "flexible_mode@driveshaft",
                "--start-from", tmp_path / "d" / "diagnose.json", "--out", tmp_path / "a",
                "--budget", 120, "--no-progress", timeout=1800)
