@@ -187,8 +187,8 @@ def diagnose(
              "without any effect, and a poor fit can hide the truth's class)")] = True,
     global_search: Annotated[bool, typer.Option(
         "--global/--local", help="--local: no space-filling design nor surrogate search, "
-        "Levenberg-Marquardt from the start values (bench/recovery.py: as right or more "
-        "often, in two thirds of the time)")] = True,
+        "Levenberg-Marquardt from the start values (bench/recovery.py, 40 cases: 18 of 28 "
+        "named against the default's 22, median 335 simulations against 392)")] = True,
     workers: Workers = None,
     backend: Backend = None,
     scheduler: Scheduler = None,

@@ -127,14 +127,14 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     :mod:`.calibration.refine`); ``global_phase=False`` leaves out the design and the
     surrogate search (Levenberg-Marquardt from the start values, ``local="lm"``:
     ``diagnose --local``, ``bench/recovery.py --method local``). Over the 40 cases of
-    ``bench/recovery.py --short`` the local search names the truth as often or more
-    (17 of 28 against 15) in two thirds of the time (README, "Benchmarks"), but not in
-    every hand-picked case
-    (``bench/verdicts.py``'s friction at the clutch's drive side: the local
-    search names the crank side, the true candidate stalled at H0's chi2), so the global
-    search stays the default. ``from_nominal``: how far (coded) H0's optimum must lie from
-    the nominal base values for the screen's first look to start from these too
-    (:func:`~sensfw.measure.screening.screen`; ``math.inf``: never)."""
+    ``bench/recovery.py --short`` the global search names the truth more often (22 of 28
+    against 18 at stop 41; at stop 36 the local search led, 17 against 15) with a median
+    of 392 simulations against 335 (README, "Benchmarks"), and in
+    ``bench/verdicts.py``'s friction at the clutch's drive side the local search names the
+    crank side (the true candidate stalled at H0's chi2). ``from_nominal``: how far
+    (coded) H0's optimum must lie from the nominal base values for the screen's first
+    look to start from these too (:func:`~sensfw.measure.screening.screen`;
+    ``math.inf``: never)."""
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
