@@ -517,11 +517,13 @@ def _polish_named(res: Residuals, calibrated: list[Hypothesis], opts: dict, log:
     refined further (DFO-LS from its best run, one start, ``4 (k + 1)`` points a round)
     for at most ``rounds`` rounds, while a round gains at least ``gain`` of its chi2. The
     user reads the named effect's parameters off this fit, and the recovery benchmark
-    found the named truth stopped far short of its true values' chi2 (seed 2032: a preload
-    at the crankshaft named at chi2 437 for 45 entries, its DFO-LS out of evaluations
-    after 10, its true values 14.3). Places joined as twins are run at their
-    representative's new optimum and stay joined where they still tie. The leader only
-    gains, so the verdict's side (an effect, not H0) cannot change; a tie can break."""
+    found the named truth stopped far short of its true values' chi2 (seed 2025: a preload
+    at the clutch named at chi2 1374 for 128 entries, its last calibration over before a
+    DFO-LS ran, its true values 15.2; refined 22.2); a ridge between two basins it does
+    not cross (seed 2032: 437 -> 434, true values 14.3). Places joined as twins are run at
+    their representative's new optimum and stay joined where they still tie. The leader
+    only gains, so the verdict's side (an effect, not H0) cannot change; a tie can
+    break."""
     n = res.entries.size()
     lead = min(calibrated, key=lambda h: h.bic(n))
     named = [h for h in calibrated if h.bic(n) - lead.bic(n) <= TIE_BIC
