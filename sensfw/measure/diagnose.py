@@ -501,10 +501,9 @@ def _places_never_calibrated(res: Residuals, hyps: Sequence[Hypothesis], lead: H
         log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
         calibrated.append(h)
         for t in twins:
-            (w,) = res.evaluate(t.effects, [h.fit.values], f"{t.name} at {h.name}'s optimum")
-            if w is not None and float(w @ w) - h.fit.chi2 <= TIE_BIC:
-                t.fit = _twin_fit(t, h, w)
-                t.notes.append(f"at {h.name}'s optimum chi2 {float(w @ w):.4g} "
+            chi2 = _join_at(res, t, h)
+            if chi2 - h.fit.chi2 <= TIE_BIC:
+                t.notes.append(f"at {h.name}'s optimum chi2 {chi2:.4g} "
                                f"({h.fit.chi2:.4g}): the channels cannot tell them apart")
                 calibrated.append(t)
 
@@ -548,12 +547,21 @@ def _polish_named(res: Residuals, calibrated: list[Hypothesis], opts: dict, log:
                            f"chi2 {start:.4g} -> {h.fit.chi2:.4g}")
             log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
             for t in calibrated:
-                if t.fit.info.get("twin_of") != h.name:
-                    continue
-                (w,) = res.evaluate(t.effects, [h.fit.values],
-                                    f"{t.name} at {h.name}'s optimum")
-                if w is not None and float(w @ w) - h.fit.chi2 <= TIE_BIC:
-                    t.fit = _twin_fit(t, h, w)
+                if t.fit.info.get("twin_of") == h.name:
+                    _join_at(res, t, h)
+
+
+def _join_at(res: Residuals, t: Hypothesis, h: Hypothesis) -> float:
+    """``t`` run at ``h``'s optimum; where it ties ``h`` there (within
+    :data:`~sensfw.measure.ranking.TIE_BIC`) it takes that point as its fit
+    (:func:`_twin_fit`). Returns its chi2 there (infinite where the run failed)."""
+    (w,) = res.evaluate(t.effects, [h.fit.values], f"{t.name} at {h.name}'s optimum")
+    if w is None:
+        return math.inf
+    chi2 = float(w @ w)
+    if chi2 - h.fit.chi2 <= TIE_BIC:
+        t.fit = _twin_fit(t, h, w)
+    return chi2
 
 
 def _twin_fit(t: Hypothesis, h: Hypothesis, w: np.ndarray) -> Fit:
@@ -577,14 +585,12 @@ def _join_twins(res: Residuals, hyps: Sequence[Hypothesis], calibrated: list[Hyp
         for t in hyps:
             if t.screen.get("twin") != h.name or t in calibrated:
                 continue
-            (w,) = res.evaluate(t.effects, [h.fit.values], f"{t.name} at {h.name}'s optimum")
-            if w is None:
+            chi2 = _join_at(res, t, h)
+            if not math.isfinite(chi2):
                 continue
-            chi2 = float(w @ w)
             log(f"  {t.name} (its first look was {h.name}'s) at {h.name}'s optimum: chi2 "
                 f"{chi2:.4g} against {h.fit.chi2:.4g}")
             if chi2 - h.fit.chi2 <= TIE_BIC:
-                t.fit = _twin_fit(t, h, w)
                 t.notes.append(f"its first look was {h.name}'s to round-off; at that one's "
                                f"optimum chi2 {chi2:.4g} ({h.fit.chi2:.4g})")
                 calibrated.append(t)

@@ -2,6 +2,8 @@
 sensfw/measure/diagnose.py): candidates of one effect whose first looks agree to round-off
 share one second look, and join the calibrated one where they tie at its optimum."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -40,6 +42,13 @@ class _Residuals:
     def evaluate(self, specs, points, label, levels=None):
         self.calls.append((specs[0]["attach"], label))
         return [self.by_place[specs[0]["attach"]] for _ in points]
+
+
+class _Entries:
+    """Residuals of ``n`` entries, no runs: what the steps read to rank by BIC."""
+
+    def __init__(self, n: int):
+        self.entries = SimpleNamespace(size=lambda: n)
 
 
 def test_a_twin_joins_the_calibrated_candidate_only_where_it_ties():
@@ -119,18 +128,13 @@ def test_the_runner_up_is_refined_only_where_it_stopped_on_its_budget(monkeypatc
 
     monkeypatch.setattr(diagnose, "calibrate_hypothesis", calibrate)
 
-    class Res:
-        class entries:
-            @staticmethod
-            def size():
-                return n
-
     def setup(message, scale, lead_scale=1.5):
         for h, s in ((lead, lead_scale), (second, scale), (third, 20.0)):
             h.fit = Fit(h.coords, Trial({"extra_damping": 0.2}, np.full(n, s)), None,
                         info={"refinement": [{"nf": 11, "message": message}]})
         calls.clear()
-        diagnose._finish_runner_up(Res(), [third, lead, second], {}, log=lambda s: None)
+        diagnose._finish_runner_up(_Entries(n), [third, lead, second], {},
+                                   log=lambda s: None)
 
     setup("Warning (max evals): Objective has been called MAXFUN times", 3.0)
     assert calls == [("bearing_l3", 6 * second.k + 6)]  # the runner-up only
@@ -142,7 +146,7 @@ def test_the_runner_up_is_refined_only_where_it_stopped_on_its_budget(monkeypatc
     for h in (lead, second):  # the budget ended before a local least squares ran
         h.fit.info["refinement"] = []
     second.fit.best = Trial({"extra_damping": 0.2}, np.full(n, 3.0))
-    diagnose._finish_runner_up(Res(), [lead, second], {}, log=lambda s: None)
+    diagnose._finish_runner_up(_Entries(n), [lead, second], {}, log=lambda s: None)
     assert calls == [("bearing_l3", 6 * second.k + 6)]
 
 
@@ -169,13 +173,9 @@ def test_the_named_are_refined_while_they_stop_on_their_budget(monkeypatch):
 
     monkeypatch.setattr(diagnose, "calibrate_hypothesis", calibrate)
 
-    class Res:
-        class entries:
-            @staticmethod
-            def size():
-                return n
-
+    class Res(_Entries):
         def __init__(self):
+            super().__init__(n)
             self.runs = []
 
         def evaluate(self, specs, points, label, levels=None):
