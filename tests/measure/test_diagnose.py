@@ -80,6 +80,23 @@ def test_offsets_without_an_effect_give_parameters_and_recover_them(study, runne
     assert {"H0", "first look"} <= set(res.simulations_by_step)
 
 
+def test_calibrate_recovers_the_offsets_in_two_searches(study, runner, tmp_path):
+    """``sensfw calibrate`` (``recalibrate``, two searches of 30 points) on the offsets-only
+    record: the base values recovered as diagnosis's H0 recovers them (within 15 %), the
+    fit within the noise, the budget held."""
+    from sensfw.measure.recalibrate import recalibrate
+
+    log = []
+    out = recalibrate(study, measure(study, tmp_path), runner, log=log.append)
+    for name, truth in CALIBRATED.items():
+        assert out["params"][name] == pytest.approx(truth, rel=0.15), (name, out["params"])
+    assert out["fits_noise"], out["chi2"]
+    # on top of the budget: the nominal and the calibrated model's runs, and the model's
+    # scatter around the optimum (2 d, d variables)
+    assert out["n_simulations"] <= out["budget"] + 2 + 2 * len(out["variables"])
+    assert any("local searches from the design" in line for line in log)
+
+
 SUITE = [c for c in VERDICTS.CASES if c.suite]
 
 
