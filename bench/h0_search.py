@@ -5,12 +5,13 @@ i``), H0 alone ("parameters only", no candidate) calibrated at the diagnosis's b
 record of runs (the run store only saves simulation time):
 
 - ``surrogate``: design, surrogate search (60 % of the points), DFO-LS from its best: the
-  candidates' calibration, and H0's before stop 42;
+  candidates' calibration and diagnosis's H0 (``calibrate``'s before stop 42);
 - ``surrogate 30 %``: the same with 30 % for design and search;
 - ``design DFO-LS``: the design (``2 d + 1`` points) and DFO-LS from its best two points;
 - ``surrogate 30 %, 4x``: four times the points;
 - ``two searches``: :func:`sensfw.measure.recalibrate.two_searches`, the design's DFO-LS
-  then the surrogate search seeded with its runs (``sensfw calibrate``'s since stop 42;
+  then the surrogate search seeded with its runs, each with the points above
+  (``sensfw calibrate``'s since stop 42;
   tried as diagnosis's H0 at stop 42 and not kept, README).
 
 ``--calibrate``: at ``sensfw calibrate``'s budget instead (60 points,
@@ -49,7 +50,7 @@ SEARCHES = {
     "surrogate 30 %": ({"global_share": 0.3}, 1),
     "design DFO-LS": ({"global_share": 0.0}, 1),
     "surrogate 30 %, 4x": ({"global_share": 0.3}, 4),
-    "two searches": (None, 1),
+    "two searches": (None, 2),  # the points of each search: two_searches halves them
 }
 
 
@@ -81,7 +82,7 @@ def run_case(study, i: int, seed0: int, store: Path | None, workers: int,
            "levels": case["levels"], "chi2": {}, "simulations": {}, "wall_s": {}}
     with Runner(RunStore(store or tmp / "runs"), backend="processes",
                 workers=workers) as runner:
-        searches = {"surrogate": SEARCHES["surrogate"], "two searches": (None, 0.5)} \
+        searches = {"surrogate": SEARCHES["surrogate"], "two searches": (None, 1)} \
             if calibrate else SEARCHES
         for name, (opts, factor) in searches.items():
             _, _, space, res = calibration_residuals(study, meas, runner)
@@ -91,7 +92,7 @@ def run_case(study, i: int, seed0: int, store: Path | None, workers: int,
             h0 = Hypothesis(None, "", Coordinates.of(space))
             t0 = time.perf_counter()
             base = {"q": max(2, workers), "local": "dfols"}
-            fit = two_searches(res, h0, int(points * factor), base) if opts is None else \
+            fit = two_searches(res, h0, points * factor, base) if opts is None else \
                 calibrate_hypothesis(res, h0, points * factor, **base, **opts)
             row["chi2"][name] = fit.chi2
             row["simulations"][name] = res.n_simulations

@@ -30,7 +30,8 @@ def default_budget(n_levels: int) -> int:
 
 def two_searches(res: Residuals, h: Hypothesis, points: int, opts: dict,
                  log=lambda s: None) -> Fit:
-    """``h`` calibrated by two searches of ``points`` each: DFO-LS from the best two points
+    """``h`` calibrated with ``points`` in two searches of half of them each: DFO-LS from the
+    best two points
     of a space-filling design (``2 d + 1`` points), then the surrogate search seeded with
     every run of it and DFO-LS from its best. The discrepancy is rough with narrow basins
     and the two stall in different cases: over the 40 cases of ``bench/recovery.py
@@ -41,13 +42,14 @@ def two_searches(res: Residuals, h: Hypothesis, points: int, opts: dict,
     at ``sensfw calibrate``'s 60 points (``--calibrate``: half for each search against all
     for the surrogate search), see the README, "Benchmarks", stop 42. ``opts`` are
     :func:`~sensfw.measure.diagnose.calibrate_hypothesis`'s; where they leave out the
-    design (``n_design=0``: a local calibration), one search."""
+    design (``n_design=0``: a local calibration), one search with all ``points``."""
     if opts.get("n_design") == 0:
         return calibrate_hypothesis(res, h, points, log=log, **opts)
-    first = calibrate_hypothesis(res, h, points, log=log, **{**opts, "global_share": 0.0})
+    half = points // 2
+    first = calibrate_hypothesis(res, h, half, log=log, **{**opts, "global_share": 0.0})
     log(f"  local searches from the design: chi2 {first.chi2:.4g}; the surrogate search "
         "from all of their runs")
-    return calibrate_hypothesis(res, h, points, log=log, **{**opts, "n_design": 0})
+    return calibrate_hypothesis(res, h, half, log=log, **{**opts, "n_design": 0})
 
 
 def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,
@@ -65,9 +67,7 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
     log(f"calibrating {', '.join(names)} ({source}), {budget} simulations")
     h0 = Hypothesis(None, "", base)
     opts = {"q": workers_of(runner), "local": local, **({} if global_phase else LOCAL_ONLY)}
-    points = budget // n_levels
-    fit = two_searches(res, h0, points // 2, opts, log) if global_phase else \
-        calibrate_hypothesis(res, h0, points, log=log, **opts)
+    fit = two_searches(res, h0, budget // n_levels, opts, log)
     rough = widen_for_roughness(res, fit, log)
     (cal_cmp,) = res.comparisons(None, [fit.values], "calibrated")
     trajectory = [{"step": label, "error": res.rms_db(c), "error_per_level":

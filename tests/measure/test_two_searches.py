@@ -22,10 +22,10 @@ BROAD = np.array([-0.5, 0.5, -0.4])
 
 
 class _Analytic:
-    """The base variables' residuals as an analytic function of the coded point (no simulation): one
-    entry with a narrow Gaussian basin around ``NARROW`` and three pulling gently toward
-    ``BROAD``; every run is kept as a trial, as :class:`~sensfw.measure.residuals.Residuals`
-    keeps them."""
+    """The base variables' residuals as an analytic function of the coded point (no
+    simulation): one entry with a narrow Gaussian basin around ``NARROW`` and three
+    pulling gently toward ``BROAD``; every run is kept as a trial, as
+    :class:`~sensfw.measure.residuals.Residuals` keeps them."""
 
     def __init__(self, coords: Coordinates):
         self.coords, self.pool, self.runs = coords, [], 0
@@ -62,7 +62,7 @@ def test_the_design_searches_first_then_the_surrogate_seeded_with_them(monkeypat
     monkeypatch.setattr(recalibrate, "calibrate_hypothesis", spy)
     h = h0()
     res = _Analytic(h.coords)
-    fit = two_searches(res, h, 20, {"q": 2, "local": "dfols"})
+    fit = two_searches(res, h, 40, {"q": 2, "local": "dfols"})
     first, second = calls
     assert first["global_share"] == 0.0 and "n_design" not in first  # design + DFO-LS
     assert second["n_design"] == 0 and "global_share" not in second   # surrogate, default
@@ -79,7 +79,9 @@ def test_the_design_searches_first_then_the_surrogate_seeded_with_them(monkeypat
 def test_without_a_global_phase_one_local_search(monkeypatch):
     calls = []
     monkeypatch.setattr(recalibrate, "calibrate_hypothesis",
-                        lambda res, h, budget, **kw: calls.append(kw) or "fit")
+                        lambda res, h, budget, **kw: calls.append({**kw, "budget": budget})
+                        or "fit")
     assert two_searches(None, h0(), 30, {"q": 2, "local": "lm", **LOCAL_ONLY}) == "fit"
+    # one search with every point
     assert [{k: v for k, v in kw.items() if k != "log"} for kw in calls] == [
-        {"q": 2, "local": "lm", **LOCAL_ONLY}]
+        {"q": 2, "local": "lm", **LOCAL_ONLY, "budget": 30}]
