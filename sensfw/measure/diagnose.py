@@ -107,6 +107,31 @@ def calibrate_hypothesis(res: Residuals, h: Hypothesis, budget: int, *,
     return fit
 
 
+def two_searches(res: Residuals, h: Hypothesis, points: int, opts: dict,
+                 log=lambda s: None) -> Fit:
+    """``h`` calibrated with ``points`` in two searches of half of them each: DFO-LS from the
+    best two points of a space-filling design (``2 d + 1`` points, or ``opts``'s), then the
+    surrogate search seeded with every run of it and DFO-LS from its best. The discrepancy
+    is rough with narrow basins and the two stall in different cases: over the 40 cases of
+    ``bench/recovery.py --short``, the base variables alone at diagnosis's H0 budget
+    (``bench/h0_search.py``), the surrogate search ended within 20 % of the lowest chi2 any
+    search found in 32 cases, the design's DFO-LS in 31, the surrogate search with four
+    times the points in 35 (166 simulations a case), the two searches in 39, 38 of them
+    within 5 % (149); at ``sensfw calibrate``'s 60 points (``--calibrate``: half for each
+    search against all for the surrogate search), see the README, "Benchmarks", stop 42;
+    for ``sensfw augment``'s calibrations they did worse than one search
+    (``bench/augment_search.py``, stop 43). ``opts``
+    are :func:`calibrate_hypothesis`'s; where they leave out the design (``n_design=0``: a
+    local calibration), one search with all ``points``."""
+    if opts.get("n_design") == 0:
+        return calibrate_hypothesis(res, h, points, log=log, **opts)
+    half = points // 2
+    first = calibrate_hypothesis(res, h, half, log=log, **{**opts, "global_share": 0.0})
+    log(f"  local searches from the design: chi2 {first.chi2:.4g}; the surrogate search "
+        "from all of their runs")
+    return calibrate_hypothesis(res, h, half, log=log, **{**opts, "n_design": 0})
+
+
 def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
              candidates: Sequence[str] | None = None, final: int = 2,
              min_delta_bic: float = 10.0, budget: int | None = None, prune: bool = True,

@@ -1,7 +1,8 @@
 """Calibrate a study's base variables alone (hypothesis "parameters" of diagnosis, the
 ``sensfw calibrate`` command): the global calibration of :mod:`sensfw.measure.calibration`
-in two searches (:func:`two_searches`), the calibrated values with intervals and flags, the
-error per level before and after, and the calibrated study file."""
+in two searches (:func:`~sensfw.measure.diagnose.two_searches`), the calibrated values
+with intervals and flags, the error per level before and after, and the calibrated study
+file."""
 
 from __future__ import annotations
 
@@ -14,42 +15,17 @@ from ..study import Study
 from ..study.edit import set_calibration, set_calibration_result, set_nominals
 from . import discrepancy
 from .augment import _source_text
-from .calibration import Coordinates, Fit
-from .diagnose import LOCAL_ONLY, calibrate_hypothesis, workers_of
+from .calibration import Coordinates
+from .diagnose import LOCAL_ONLY, two_searches, workers_of
 from .hypotheses import Hypothesis, calibration_residuals
 from .io import Measurement
 from .prediction import fitted_records
-from .residuals import Residuals
 from .scatter import widen_for_roughness
 
 
 def default_budget(n_levels: int) -> int:
     """Simulations of a calibration when none is given: 60 points, each at every level."""
     return 60 * n_levels
-
-
-def two_searches(res: Residuals, h: Hypothesis, points: int, opts: dict,
-                 log=lambda s: None) -> Fit:
-    """``h`` calibrated with ``points`` in two searches of half of them each: DFO-LS from the
-    best two points
-    of a space-filling design (``2 d + 1`` points), then the surrogate search seeded with
-    every run of it and DFO-LS from its best. The discrepancy is rough with narrow basins
-    and the two stall in different cases: over the 40 cases of ``bench/recovery.py
-    --short``, the base variables alone at diagnosis's H0 budget (``bench/h0_search.py``),
-    the surrogate search ended within 20 % of the lowest chi2 any search found in 32
-    cases, the design's DFO-LS in 31, the surrogate search with four times the points in
-    35 (166 simulations a case), the two searches in 39, 38 of them within 5 % (149);
-    at ``sensfw calibrate``'s 60 points (``--calibrate``: half for each search against all
-    for the surrogate search), see the README, "Benchmarks", stop 42. ``opts`` are
-    :func:`~sensfw.measure.diagnose.calibrate_hypothesis`'s; where they leave out the
-    design (``n_design=0``: a local calibration), one search with all ``points``."""
-    if opts.get("n_design") == 0:
-        return calibrate_hypothesis(res, h, points, log=log, **opts)
-    half = points // 2
-    first = calibrate_hypothesis(res, h, half, log=log, **{**opts, "global_share": 0.0})
-    log(f"  local searches from the design: chi2 {first.chi2:.4g}; the surrogate search "
-        "from all of their runs")
-    return calibrate_hypothesis(res, h, half, log=log, **{**opts, "n_design": 0})
 
 
 def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runner,

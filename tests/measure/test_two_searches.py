@@ -1,5 +1,5 @@
 """``sensfw calibrate`` calibrates the base variables by two searches
-(sensfw/measure/recalibrate.py, two_searches): DFO-LS from the best points of a
+(sensfw/measure/diagnose.py, two_searches): DFO-LS from the best points of a
 space-filling design, then the surrogate search seeded with all of those runs. Over the
 recovery benchmark's 40 cases each search alone stalled far from the lowest chi2 found in
 about one case in five where the two did not (bench/h0_search.py; README, "Benchmarks",
@@ -9,11 +9,10 @@ the lowest run of both and the global optimum, and a local calibration is one se
 
 import numpy as np
 
-import sensfw.measure.recalibrate as recalibrate
+import sensfw.measure.diagnose as diagnose
 from sensfw.measure.calibration import Axis, Coordinates, Trial
-from sensfw.measure.diagnose import LOCAL_ONLY
+from sensfw.measure.diagnose import LOCAL_ONLY, two_searches
 from sensfw.measure.hypotheses import Hypothesis
-from sensfw.measure.recalibrate import two_searches
 
 #: the global optimum (coded) of the residuals below: a narrow basin, chi2 0.09 at its
 #: centre, next to a broad one of chi2 100 around ``BROAD``
@@ -51,7 +50,7 @@ def h0():
 
 def test_the_design_searches_first_then_the_surrogate_seeded_with_them(monkeypatch):
     calls = []
-    real = recalibrate.calibrate_hypothesis
+    real = diagnose.calibrate_hypothesis
 
     def spy(res, h, budget, **kw):
         seen = len(res.trials())
@@ -59,7 +58,7 @@ def test_the_design_searches_first_then_the_surrogate_seeded_with_them(monkeypat
         calls.append({"budget": budget, "seen": seen, "ran": len(fit.trials), **kw})
         return fit
 
-    monkeypatch.setattr(recalibrate, "calibrate_hypothesis", spy)
+    monkeypatch.setattr(diagnose, "calibrate_hypothesis", spy)
     h = h0()
     res = _Analytic(h.coords)
     fit = two_searches(res, h, 40, {"q": 2, "local": "dfols"})
@@ -78,7 +77,7 @@ def test_the_design_searches_first_then_the_surrogate_seeded_with_them(monkeypat
 
 def test_without_a_global_phase_one_local_search(monkeypatch):
     calls = []
-    monkeypatch.setattr(recalibrate, "calibrate_hypothesis",
+    monkeypatch.setattr(diagnose, "calibrate_hypothesis",
                         lambda res, h, budget, **kw: calls.append({**kw, "budget": budget})
                         or "fit")
     assert two_searches(None, h0(), 30, {"q": 2, "local": "lm", **LOCAL_ONLY}) == "fit"
