@@ -9,7 +9,7 @@ record of runs (the run store only saves simulation time):
 - ``surrogate 30 %``: the same with 30 % for design and search;
 - ``design DFO-LS``: the design (``2 d + 1`` points) and DFO-LS from its best two points;
 - ``surrogate 30 %, 4x``: four times the points;
-- ``two searches``: :func:`sensfw.measure.recalibrate.two_searches`, the design's DFO-LS
+- ``two searches``: :func:`sensfw.measure.diagnose.two_searches`, the design's DFO-LS
   then the surrogate search seeded with its runs, each with the points above
   (``sensfw calibrate``'s since stop 42;
   tried as diagnosis's H0 at stop 42 and not kept, README).
@@ -38,7 +38,6 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 
 import argparse  # noqa: E402
 import importlib.util  # noqa: E402
-import json  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 
@@ -67,11 +66,10 @@ def run_case(study, i: int, seed0: int, store: Path | None, workers: int,
              calibrate: bool = False) -> dict:
     from sensfw.measure import cases
     from sensfw.measure.calibration import Coordinates
-    from sensfw.measure.diagnose import calibrate_hypothesis, default_budget
+    from sensfw.measure.diagnose import calibrate_hypothesis, default_budget, two_searches
     from sensfw.measure.hypotheses import Hypothesis, calibration_residuals
     from sensfw.measure.prepared import load_measurements
     from sensfw.measure.recalibrate import default_budget as calibrate_budget
-    from sensfw.measure.recalibrate import two_searches
     from sensfw.runs import Runner, RunStore
 
     rec = sys.modules["recovery"]
@@ -114,22 +112,16 @@ def summary(rows: list[dict]) -> None:
 
 
 def main() -> None:
+    rec = _recovery()
     ap = argparse.ArgumentParser()
-    ap.add_argument("--cases", type=int, default=10)
-    ap.add_argument("--first", type=int, default=0, help="index of the first case")
-    ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
-    ap.add_argument("--workers", type=int, default=1)
+    rec.part_arguments(ap)
     ap.add_argument("--store", type=Path, default=None, help="run store shared by the cases")
-    ap.add_argument("--out", type=Path, default=None, help="append each case to this JSONL")
     ap.add_argument("--calibrate", action="store_true",
                     help="at sensfw calibrate's budget: the surrogate search, two searches")
-    ap.add_argument("--merge", type=Path, nargs="*", help="print the figures of these parts")
     args = ap.parse_args()
     if args.merge:
-        summary([json.loads(line) for p in args.merge for line in p.read_text().splitlines()
-                 if line.strip()])
+        summary(rec.read_parts(args.merge))
         return
-    rec = _recovery()
     study = rec.bench_study("quick", short=True)
     rows = []
     for i in range(args.first, args.first + args.cases):
@@ -137,9 +129,7 @@ def main() -> None:
         rows.append(row)
         print(f"case {i} (seed {row['seed']}): " + ", ".join(
             f"{k} {v:.4g}" for k, v in row["chi2"].items()), flush=True)
-        if args.out:
-            with args.out.open("a") as f:
-                f.write(json.dumps(row) + "\n")
+        rec.append_part(args.out, row)
     summary(rows)
 
 

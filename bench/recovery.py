@@ -222,15 +222,35 @@ def summary(rows: list[dict]) -> None:
                 f"{k} {sum(s.get(k, 0) for s in steps) / len(steps):.0f}" for k in names))
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
+def part_arguments(ap: argparse.ArgumentParser, workers: int = 1) -> None:
+    """The arguments every benchmark over these cases shares (this one,
+    ``bench/h0_search.py``, ``bench/augment_search.py``): which cases, the workers, and
+    the parts it runs in (one JSONL line per case) and merges."""
     ap.add_argument("--cases", type=int, default=10)
     ap.add_argument("--first", type=int, default=0, help="index of the first case")
     ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
-    ap.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD)
-    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--workers", type=int, default=workers)
     ap.add_argument("--out", type=Path, default=None, help="append each case to this JSONL")
     ap.add_argument("--merge", type=Path, nargs="*", help="print the figures of these parts")
+
+
+def read_parts(paths) -> list[dict]:
+    """Every case of the JSONL parts ``paths``."""
+    return [json.loads(line) for p in paths for line in Path(p).read_text().splitlines()
+            if line.strip()]
+
+
+def append_part(path: Path | None, row: dict) -> None:
+    """Append one case to the part ``path`` (nothing without one)."""
+    if path:
+        with Path(path).open("a") as f:
+            f.write(json.dumps(row) + "\n")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    part_arguments(ap, workers=2)
+    ap.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD)
     ap.add_argument("--short", action="store_true", help="quick study: 0.15 s chirp (the "
                     "test suite's)")
     ap.add_argument("--study", choices=["quick", "bert"], default="quick",
@@ -248,9 +268,7 @@ def main() -> None:
                          "'inf': never, as before stop 39)")
     args = ap.parse_args()
     if args.merge:
-        rows = [json.loads(line) for f in args.merge for line in f.read_text().splitlines()
-                if line.strip()]
-        summary(rows)
+        summary(read_parts(args.merge))
         return
     from sensfw.measure import cases
 
@@ -273,9 +291,7 @@ def main() -> None:
               f"{r.get('truth_first_rank')}/{r['candidates']})" if case["effect"] else ""),
               flush=True)
         rows.append(r)
-        if args.out:
-            with args.out.open("a") as f:
-                f.write(json.dumps(r) + "\n")
+        append_part(args.out, r)
     summary(rows)
 
 

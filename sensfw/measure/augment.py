@@ -1,8 +1,10 @@
 """Add the missing effect at its place and calibrate it jointly with the base parameters: the
 augmented model, the augmented study file, and the error trajectory per level, nominal
 model -> base parameters recalibrated -> effect added (its nominal values) -> jointly
-calibrated. Both calibrations are the global ones of :mod:`sensfw.measure.calibration`;
-``budget`` counts simulations (one per point and level), as for diagnosis."""
+calibrated. Both calibrations are the global ones of :mod:`sensfw.measure.calibration`, one
+search each (two, as ``sensfw calibrate`` runs them, did worse here:
+``bench/augment_search.py``); ``budget`` counts simulations (one per point and level), as
+for diagnosis."""
 
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ from ..runs import Runner
 from ..study import Study
 from ..study.edit import add_effect, set_calibration, set_calibration_result
 from .calibration import Coordinates
-from .diagnose import LOCAL_ONLY, _around, calibrate_hypothesis, workers_of
+from .diagnose import LOCAL_ONLY, _around, calibrate_hypothesis, two_searches, workers_of
 from .hypotheses import Hypothesis, calibration_residuals, neutral_values
 from .io import Measurement
 from .prediction import fitted_records
@@ -33,7 +35,8 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
             attach: str | None = None, start: Mapping[str, float] | None = None,
             base_start: Mapping[str, float] | None = None, budget: int | None = None,
             local: str = "dfols", study_text: str | None = None,
-            options: Mapping[str, object] | None = None, log=lambda s: None) -> dict:
+            options: Mapping[str, object] | None = None,
+            searches: tuple[int, int] = (1, 1), log=lambda s: None) -> dict:
     """Calibrate ``effect`` at ``attach`` (default: its preferred place) jointly with the
     study's calibration variables. ``start`` (e.g. the values :func:`diagnose` found: base
     variables and effect parameters) and ``base_start`` (diagnose's "parameters only"
@@ -41,7 +44,14 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     study's file) is the text the augmented study is written from (comments and layout
     kept); the result's ``"study_text"`` is the augmented study. ``options`` are the
     effect's own options (``{"elements": 6}`` for ``micro_slip``), checked against its
-    declaration and written into the augmented study's effect entry."""
+    declaration and written into the augmented study's effect entry. ``searches``: how
+    many searches (1 or 2, :func:`two_searches`) the base variables' calibration and the
+    joint one get where they are global (no ``base_start``, no ``start``). One each: over
+    the 34 effect cases of ``bench/augment_search.py`` (the true effect at its place, the
+    default budget) the joint calibration reached the noise in 29 with one search each,
+    26 with two for the base variables, 24 with two for both (README, stop 43)."""
+    if len(searches) != 2 or not set(searches) <= {1, 2}:
+        raise SensfwError(f"augment: searches must be two of 1 or 2, not {searches!r}")
     eff, problems = build(effect_registry.get(effect), {"attach": attach, **(options or {})})
     if problems:
         raise SensfwError(f"effect {effect}: {describe(problems)}")
@@ -52,6 +62,12 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     q = workers_of(runner)
     base = Coordinates.of(space)
     nominal, _ = res.nominal()
+
+    def search(n, h, points, opts):
+        if n == 2:
+            return two_searches(res, h, points, opts, log)
+        return calibrate_hypothesis(res, h, points, log=log, **opts)
+
     log(f"recalibrating the base variables {', '.join(names)} ({source})")
     h0 = Hypothesis(None, "", base)
     if base_start is not None:
@@ -59,9 +75,8 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         if given:
             res.evaluate(None, [{**nominal, **given}], "base start")
     # from a diagnosis's values: refine only (its global search found them)
-    h0.fit = calibrate_hypothesis(res, h0, int(0.35 * budget) // n_levels, q=q,
-                                  local=local, log=log,
-                                  **(LOCAL_ONLY if base_start is not None else {}))
+    h0.fit = search(searches[0], h0, int(0.35 * budget) // n_levels,
+                    {"q": q, "local": local, **(LOCAL_ONLY if base_start is not None else {})})
     widen_for_roughness(res, h0.fit, log)
     h = Hypothesis(eff, eff.attach, base + Coordinates.of(None, eff.parameters()))
     added = {**h0.fit.values, **{p.name: p.nominal for p in eff.parameters()}}
@@ -87,8 +102,8 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     log(f"calibrating {h.name} jointly with {', '.join(names)} ({left} points)")
     design = LOCAL_ONLY if start is not None else {"design_box": _around(h0, h),
                                                      "n_design": len(h.own) + 1}
-    h.fit = calibrate_hypothesis(res, h, max(left, 2 * h.k + 4), q=q, local=local,
-                                 log=log, **design)
+    h.fit = search(searches[1], h, max(left, 2 * h.k + 4),
+                   {"q": q, "local": local, **design})
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),
              ("effect added", h.effects, added), ("jointly calibrated", h.effects,
                                                   h.fit.values)]
