@@ -10,12 +10,11 @@ same effect at another place, and other effects) to keep the suite's time in bou
 ``bench/recovery.py`` runs the full candidate set on random cases.
 """
 
-import importlib.util
 import json
-import sys
 import tomllib
 from pathlib import Path
 
+import bench_modules
 import numpy as np
 import pytest
 
@@ -30,16 +29,7 @@ pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _verdicts():
-    spec = importlib.util.spec_from_file_location("sensfw_bench_verdicts",
-                                                  ROOT / "bench" / "verdicts.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # its dataclass looks its module up there
-    spec.loader.exec_module(mod)
-    return mod
-
-
-VERDICTS = _verdicts()
+VERDICTS = bench_modules.load("verdicts")
 OFFSETS, CALIBRATED = VERDICTS.OFFSETS, VERDICTS.CALIBRATED
 short_quick, measure = VERDICTS.short_quick, VERDICTS.measure
 

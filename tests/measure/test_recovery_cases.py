@@ -8,14 +8,11 @@ deviations of a chi-square's mean). The rates over random draws are the benchmar
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
+import bench_modules
 import pytest
 
 pytestmark = pytest.mark.slow
 
-BENCH = Path(__file__).resolve().parents[2] / "bench" / "recovery.py"
 #: benchmark case index -> seed 2025 + index (bench/recovery.py --seed 2025): a contact
 #: hardening at bearing l1, named with its place and calibrated to the noise. Cases 1 (no
 #: effect), 15 (a limit stop the data cannot tell: "parameters") and 16 (a friction H0
@@ -27,10 +24,7 @@ CASES = [4]
 
 @pytest.fixture(scope="module")
 def recovery():
-    spec = importlib.util.spec_from_file_location("sensfw_bench_recovery", BENCH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return bench_modules.load("recovery")
 
 
 @pytest.mark.parametrize("index", CASES)
