@@ -120,9 +120,9 @@ def two_searches(res: Residuals, h: Hypothesis, points: int, opts: dict,
     within 5 % (149); at ``sensfw calibrate``'s 60 points (``--calibrate``: half for each
     search against all for the surrogate search), see the README, "Benchmarks", stop 42;
     for ``sensfw augment``'s calibrations they did worse than one search
-    (``bench/augment_search.py``, stop 43). ``opts``
-    are :func:`calibrate_hypothesis`'s; where they leave out the design (``n_design=0``: a
-    local calibration), one search with all ``points``."""
+    (``bench/augment_search.py``, stop 43). ``opts`` are :func:`calibrate_hypothesis`'s;
+    where they leave out the design (``n_design=0``: a local calibration), one search with
+    all ``points``."""
     if opts.get("n_design") == 0:
         return calibrate_hypothesis(res, h, points, log=log, **opts)
     half = points // 2

@@ -26,7 +26,6 @@ from sensfw.runs import Runner, RunStore
 from sensfw.study import Study
 
 pytestmark = pytest.mark.slow
-ROOT = Path(__file__).resolve().parents[2]
 
 
 VERDICTS = bench_modules.load("verdicts")
