@@ -24,28 +24,20 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-# bench/signal.py would shadow the standard library's signal module: drop this folder
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+# bench/signal.py would shadow the standard library's signal module: this folder goes last
+HERE = Path(__file__).resolve().parent
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE] + [str(HERE)]
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
 import math  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+import recovery as rec  # noqa: E402
 
 #: name -> augment's ``searches`` (base variables, joint)
 SEARCHES = {"one search": (1, 1), "two for H0": (2, 1), "two each": (2, 2)}
-
-
-def _recovery():
-    spec = importlib.util.spec_from_file_location(
-        "recovery", Path(__file__).resolve().parent / "recovery.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["recovery"] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def run_case(study, case: dict, store: Path | None, workers: int) -> dict:
@@ -97,10 +89,8 @@ def summary(rows: list[dict]) -> None:
 
 
 def main() -> None:
-    rec = _recovery()
     ap = argparse.ArgumentParser()
     rec.part_arguments(ap)
-    ap.add_argument("--store", type=Path, default=None, help="run store shared by the cases")
     args = ap.parse_args()
     if args.merge:
         summary(rec.read_parts(args.merge))

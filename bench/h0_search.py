@@ -33,15 +33,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-# bench/signal.py would shadow the standard library's signal module: drop this folder
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+# bench/signal.py would shadow the standard library's signal module: this folder goes last
+HERE = Path(__file__).resolve().parent
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE] + [str(HERE)]
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+import recovery as rec  # noqa: E402
 
 #: search -> (calibrate_hypothesis options, points factor); None: two_searches
 SEARCHES = {
@@ -51,15 +52,6 @@ SEARCHES = {
     "surrogate 30 %, 4x": ({"global_share": 0.3}, 4),
     "two searches": (None, 2),  # the points of each search: two_searches halves them
 }
-
-
-def _recovery():
-    spec = importlib.util.spec_from_file_location(
-        "recovery", Path(__file__).resolve().parent / "recovery.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["recovery"] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def run_case(study, i: int, seed0: int, store: Path | None, workers: int,
@@ -72,7 +64,6 @@ def run_case(study, i: int, seed0: int, store: Path | None, workers: int,
     from sensfw.measure.recalibrate import default_budget as calibrate_budget
     from sensfw.runs import Runner, RunStore
 
-    rec = sys.modules["recovery"]
     case = cases.draw(study, seed0 + i, rec.LEVELS["quick"])
     tmp = Path(tempfile.mkdtemp(prefix="sensfw-h0-"))
     meas = load_measurements(study, cases.measure(study, case, tmp))
@@ -112,10 +103,8 @@ def summary(rows: list[dict]) -> None:
 
 
 def main() -> None:
-    rec = _recovery()
     ap = argparse.ArgumentParser()
     rec.part_arguments(ap)
-    ap.add_argument("--store", type=Path, default=None, help="run store shared by the cases")
     ap.add_argument("--calibrate", action="store_true",
                     help="at sensfw calibrate's budget: the surrogate search, two searches")
     args = ap.parse_args()

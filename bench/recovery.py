@@ -224,14 +224,20 @@ def summary(rows: list[dict]) -> None:
 
 def part_arguments(ap: argparse.ArgumentParser, workers: int = 1) -> None:
     """The arguments every benchmark over these cases shares (this one,
-    ``bench/h0_search.py``, ``bench/augment_search.py``): which cases, the workers, and
-    the parts it runs in (one JSONL line per case) and merges."""
+    ``bench/h0_search.py``, ``bench/augment_search.py``): which cases, the workers, the
+    parts it runs in (one JSONL line per case) and merges, and the shared run store."""
     ap.add_argument("--cases", type=int, default=10)
     ap.add_argument("--first", type=int, default=0, help="index of the first case")
     ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
     ap.add_argument("--workers", type=int, default=workers)
     ap.add_argument("--out", type=Path, default=None, help="append each case to this JSONL")
     ap.add_argument("--merge", type=Path, nargs="*", help="print the figures of these parts")
+    ap.add_argument("--store", type=Path, default=None,
+                    help="one run store for every case (default: a fresh one per case). "
+                    "Runs are keyed by their full specification, so a case run again, with "
+                    "another search or after a change, simulates only the points it has "
+                    "not run before: simulations per case stay what was asked for, its "
+                    "wall time does not")
 
 
 def read_parts(paths) -> list[dict]:
@@ -255,12 +261,6 @@ def main() -> None:
                     "test suite's)")
     ap.add_argument("--study", choices=["quick", "bert"], default="quick",
                     help="bert: the bolted beam's joint and beam effects, a 3 s sweep")
-    ap.add_argument("--store", type=Path, default=None,
-                    help="one run store for every case (default: a fresh one per case). "
-                    "Runs are keyed by their full specification, so a case run again, with "
-                    "another method or after a change, simulates only the points it has "
-                    "not run before: simulations per case stay what the diagnosis asked "
-                    "for, its wall time does not")
     ap.add_argument("--verbose", action="store_true")
     ap.add_argument("--from-nominal", type=float, default=None,
                     help="diagnose's from_nominal (coded distance of H0's optimum from the "
