@@ -74,6 +74,29 @@ def test_calibration_finds_the_least_squares_optimum_with_laplace_intervals(refi
     assert sum(calls) - 1 <= 40  # the budget holds (the start was evaluated before)
 
 
+@pytest.mark.parametrize("refine", ["dfols", "lm"])
+def test_a_refinement_stopped_by_its_budget_says_so_in_dfols_words(refine):
+    """Diagnosis refines a hypothesis further only where its refinement ended on the budget
+    ("max evals" in the message, DFO-LS's words): both solvers must report it so, and
+    neither where it converged. From a = 1, tau = 0.3 six points do not reach the optimum
+    (chi2 > 2x scipy's), 40 do."""
+    coords, evaluate, t, y, _ = decay_problem()
+    start = {"a": 1.0, "tau": 0.3}
+    ref = least_squares(lambda x: (x[0] * np.exp(-t / x[1]) - y) / 0.02, [1.0, 0.3],
+                        bounds=([0.5, 0.01], [5.0, 1.0]))
+    messages = {}
+    for budget in (6, 40):
+        fit = calibrate(evaluate, coords, budget, evidence=[start_trial(evaluate, start)],
+                        refine=refine, global_share=0.0, n_design=0)
+        messages[budget] = " ".join(r["message"] for r in fit.info["refinement"])
+        if budget == 6:
+            assert fit.chi2 > 2 * float(np.sum(ref.fun**2))
+        else:
+            assert fit.chi2 == pytest.approx(float(np.sum(ref.fun**2)), rel=1e-2)
+    assert "max evals" in messages[6]
+    assert "max evals" not in messages[40]
+
+
 def sine_problem():
     """A frequency to find, ``y = sin(2 pi f t)`` over 0.25 s with f = 13.3 Hz in [1, 20] Hz
     (linear axis): chi2 against f has a valley about every 4 Hz (a whole number of cycles

@@ -136,7 +136,9 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
     the damping raised a hundredfold after each failed pair (Levenberg 1944, Marquardt
     1963); four failed pairs halve the difference step; below 1.5 % of the range, or after
     two iterations gaining less than ``tol`` (relative) or 0.5 in chi2, it stops. Returns
-    ``x``, ``w``, ``jacobian`` and ``nf`` (points run)."""
+    ``x``, ``w``, ``jacobian``, ``nf`` (points run) and ``message``: DFO-LS's wording,
+    "Warning (max evals)" where the budget or ``max_iter`` ended it, "Success" where it
+    converged."""
     d = len(z0)
     best_z, best_w = np.array(z0, float), np.asarray(w0, float)
     used = 0
@@ -152,8 +154,11 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
 
     lam, slow = 1e-3, 0
     steps = np.full(d, float(step))
+    # DFO-LS's wording, so that callers read either solver's exit the same way
+    message = f"Warning (max evals): {max_iter} iterations"
     for it in range(max_iter):
         if not affordable(d + 2):
+            message = f"Warning (max evals): budget of {budget} points"
             break
         z, w = best_z, best_w
         pts, h = _jacobian_points(z, steps)
@@ -204,10 +209,15 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
             slow = slow + 1 if (old - new) / max(old, 1e-300) < tol or old - new < 0.5 else 0
             log(f"    LM iteration {it + 1}: chi2 {old:.4g} -> {new:.4g}")
             if slow >= 2:
+                message = "Success: LM gained too little in two iterations"
                 break
         elif np.max(steps) > 0.015:
             steps = np.maximum(steps / 2, np.minimum(steps, 2e-3))
             lam = 1e-3
-        else:
+        elif affordable(2):
+            message = "Success: LM found no lower point at the smallest difference step"
             break
-    return {"x": best_z, "w": best_w, "jacobian": jac, "nf": used, "message": "LM"}
+        else:
+            message = f"Warning (max evals): budget of {budget} points"
+            break
+    return {"x": best_z, "w": best_w, "jacobian": jac, "nf": used, "message": message}
