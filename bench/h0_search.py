@@ -12,7 +12,7 @@ record of runs (the run store only saves simulation time):
 - ``two searches``: :func:`sensfw.measure.diagnose.two_searches`, the design's DFO-LS
   then the surrogate search seeded with its runs, each with the points above
   (``sensfw calibrate``'s since stop 42;
-  tried as diagnosis's H0 at stop 42 and not kept, README).
+  tried as diagnosis's H0 at stop 42 and not kept, RECOVERY.md).
 
 ``--calibrate``: at ``sensfw calibrate``'s budget instead (60 points,
 :func:`sensfw.measure.recalibrate.default_budget`), the surrogate search (``calibrate``'s

@@ -49,7 +49,7 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     joint one get where they are global (no ``base_start``, no ``start``). One each: over
     the 34 effect cases of ``bench/augment_search.py`` (the true effect at its place, the
     default budget) the joint calibration reached the noise in 29 with one search each,
-    26 with two for the base variables, 24 with two for both (README, stop 43)."""
+    26 with two for the base variables, 24 with two for both (``bench/RECOVERY.md``, stop 43)."""
     if len(searches) != 2 or not set(searches) <= {1, 2}:
         raise SensfwError(f"augment: searches must be two of 1 or 2, not {searches!r}")
     eff, problems = build(effect_registry.get(effect), {"attach": attach, **(options or {})})

@@ -118,7 +118,7 @@ def two_searches(res: Residuals, h: Hypothesis, points: int, opts: dict,
     search found in 32 cases, the design's DFO-LS in 31, the surrogate search with four
     times the points in 35 (166 simulations a case), the two searches in 39, 38 of them
     within 5 % (149); at ``sensfw calibrate``'s 60 points (``--calibrate``: half for each
-    search against all for the surrogate search), see the README, "Benchmarks", stop 42;
+    search against all for the surrogate search), see ``bench/RECOVERY.md``, stop 42;
     for ``sensfw augment``'s calibrations they did worse than one search
     (``bench/augment_search.py``, stop 43). ``opts`` are :func:`calibrate_hypothesis`'s;
     where they leave out the design (``n_design=0``: a local calibration), one search with
@@ -153,8 +153,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     surrogate search (Levenberg-Marquardt from the start values, ``local="lm"``:
     ``diagnose --local``, ``bench/recovery.py --method local``). Over the 40 cases of
     ``bench/recovery.py --short`` the global search names the truth more often (22 of 28
-    against 18 at stop 41; at stop 36 the local search led, 17 against 15) with a median
-    of 392 simulations against 335 (README, "Benchmarks"), and in
+    against 18 at stop 44; at stop 36 the local search led, 17 against 15) with a median
+    of 392 simulations against 362 (``bench/RECOVERY.md``), and in
     ``bench/verdicts.py``'s friction at the clutch's drive side the local search names the
     crank side (the true candidate stalled at H0's chi2). ``from_nominal``: how far
     (coded) H0's optimum must lie from the nominal base values for the screen's first

@@ -1,7 +1,7 @@
 """``sensfw augment`` without start values: both calibrations global (the base variables,
 then the effect jointly with them), on a synthetic record of the short quick study with
 the base offsets of ``bench/verdicts.py`` and a hidden added mass. The rate over random
-cases is ``bench/augment_search.py``'s (README, "Benchmarks", stop 43); here one case end
+cases is ``bench/augment_search.py``'s (``bench/RECOVERY.md``, stop 43); here one case end
 to end. No test ran augment's global path before."""
 
 import bench_modules

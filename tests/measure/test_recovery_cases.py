@@ -4,7 +4,8 @@ default budget on the short quick study, must end as the benchmark counts right:
 and place named when the data can tell, "parameters"/"none" otherwise, and the true
 hypothesis calibrated to within its noise (chi2/n <= 1 + 3 sqrt(2/n), three standard
 deviations of a chi-square's mean). The rates over random draws are the benchmark's
-(README, "Benchmarks"); these cases keep its machinery honest in the suite."""
+(README, "Benchmarks"; ``bench/RECOVERY.md``); these cases keep its machinery honest in
+the suite."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 (sensfw/measure/diagnose.py, two_searches): DFO-LS from the best points of a
 space-filling design, then the surrogate search seeded with all of those runs. Over the
 recovery benchmark's 40 cases each search alone stalled far from the lowest chi2 found in
-about one case in five where the two did not (bench/h0_search.py; README, "Benchmarks",
+about one case in five where the two did not (bench/h0_search.py; bench/RECOVERY.md,
 stop 42); here, on an analytic residual vector, the contract: the design's local searches
 run first, the second search adds no design and sees every run of the first, the result is
 the lowest run of both and the global optimum, and a local calibration is one search."""
