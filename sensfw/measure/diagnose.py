@@ -152,9 +152,9 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     :mod:`.calibration.refine`); ``global_phase=False`` leaves out the design and the
     surrogate search (Levenberg-Marquardt from the start values, ``local="lm"``:
     ``diagnose --local``, ``bench/recovery.py --method local``). Over the 40 cases of
-    ``bench/recovery.py --short`` the global search names the truth more often (22 of 28
-    against 18 at stop 44; at stop 36 the local search led, 17 against 15) with a median
-    of 392 simulations against 362 (``bench/RECOVERY.md``), and in
+    ``bench/recovery.py --short`` the global search names the truth more often (22 of 28 at
+    stop 41, against 18 for the local one at stop 44; at stop 36 the local search led, 17
+    against 15) with a median of 392 simulations against 362 (``bench/RECOVERY.md``), and in
     ``bench/verdicts.py``'s friction at the clutch's drive side the local search names the
     crank side (the true candidate stalled at H0's chi2). ``from_nominal``: how far
     (coded) H0's optimum must lie from the nominal base values for the screen's first

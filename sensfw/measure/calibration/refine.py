@@ -155,10 +155,10 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
     lam, slow = 1e-3, 0
     steps = np.full(d, float(step))
     # DFO-LS's wording, so that callers read either solver's exit the same way
-    message = f"Warning (max evals): {max_iter} iterations"
+    exhausted = f"Warning (max evals): budget of {budget} points"
     for it in range(max_iter):
         if not affordable(d + 2):
-            message = f"Warning (max evals): budget of {budget} points"
+            message = exhausted
             break
         z, w = best_z, best_w
         pts, h = _jacobian_points(z, steps)
@@ -214,10 +214,10 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
         elif np.max(steps) > 0.015:
             steps = np.maximum(steps / 2, np.minimum(steps, 2e-3))
             lam = 1e-3
-        elif affordable(2):
-            message = "Success: LM found no lower point at the smallest difference step"
-            break
         else:
-            message = f"Warning (max evals): budget of {budget} points"
+            message = "Success: LM found no lower point at the smallest difference step" \
+                if affordable(2) else exhausted
             break
+    else:
+        message = f"Warning (max evals): {max_iter} iterations"
     return {"x": best_z, "w": best_w, "jacobian": jac, "nf": used, "message": message}
