@@ -39,6 +39,7 @@ from .distortion import (
     harmonic_rows,
     harmonics,
     thd,
+    thd_floor,
 )
 from .lines import LONGER, compare_lines, jump, longer_drive
 from .measurement import FRFRecord
@@ -137,7 +138,8 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
     rows = harmonic_rows(hm, hx, floor)
     return LevelComparison(level=level, file=file, f=f, db_model=dbm, db_measured=dbx,
                            bands=bands, resonances=res, harmonics=rows, thd_model=thd(hm),
-                           thd_measured=thd(hx), unit=measured.units.get("force", "N"),
+                           thd_measured=thd(hx), thd_floor=thd_floor(hx, floor),
+                           unit=measured.units.get("force", "N"),
                            output_unit=display_unit(measured.units.get(channel, "m/s^2")),
                            dc_model=dc_offset(model, channel),
                            dc_measured=dc_offset(measured, channel),

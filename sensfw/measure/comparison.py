@@ -58,6 +58,8 @@ class LevelComparison:
     harmonics: list[dict]
     thd_model: float | None
     thd_measured: float | None
+    #: the THD (%) the measurement's own noise reads (:func:`~.distortion.thd_floor`)
+    thd_floor: float | None = None
     notes: list[str] = field(default_factory=list)
     unit: str = "N"  # of the excitation channel (the FRF's denominator)
     output_unit: str = "m/s²"  # of the compared channel (the FRF's numerator)
@@ -206,6 +208,7 @@ class LevelComparison:
                 "settled_db": self.settled_db or None,
                 "resonances": self.resonances, "harmonics": self.harmonics,
                 "thd": {"model": self.thd_model, "measured": self.thd_measured,
+                        "measured_noise_floor": self.thd_floor,
                         "difference_db": 20 * np.log10(self.thd_model / self.thd_measured)
                         if self.thd_model and self.thd_measured else None},
                 "dc_offset": {"model": self.dc_model, "measured": self.dc_measured,

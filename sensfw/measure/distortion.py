@@ -90,6 +90,14 @@ def harmonic_rows(hm: dict[int, float], hx: dict[int, float],
     return rows
 
 
+def thd_floor(h: dict[int, float], floor: dict[int, float] | None) -> float | None:
+    """The THD (%) that the record's output noise alone reads over the orders of ``h``
+    (:func:`harmonic_floor`): noise adds in power, so a model without noise reads as
+    ``sqrt(THD_model^2 + floor^2)`` on the rig. None without a floor."""
+    ks = [k for k in (floor or {}) if k >= 2 and k in h]
+    return float(100 * np.sqrt(sum(floor[k] ** 2 for k in ks))) if ks else None
+
+
 def thd(h: dict[int, float]) -> float | None:
     """THD (%) of order amplitudes ``{1: P_1, k: P_k}``: ``100 sqrt(sum_k>=2 P_k^2) / P_1``
     (Eq. 16), None without harmonics."""

@@ -118,6 +118,7 @@ def _summary(comparisons) -> pd.DataFrame:
             "resonance measured (Hz)": f"{r['measured_hz']:.2f}" if r else "",
             "model (Hz)": f"{r['model_hz']:.2f}" if r else "",
             "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
+            + (f" (noise alone {c.thd_floor:.2f})" if c.thd_floor else "")
             if c.thd_measured is not None and c.thd_model is not None else ""})
     frame = pd.DataFrame(rows)
     if not (frame["noise alone (dB)"] != "").any():

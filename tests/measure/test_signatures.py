@@ -514,3 +514,30 @@ def test_clearance_at_a_loaded_contact_shows_no_clean_hardening_before_everythin
     above."""
     cmp = compare(study, runner, "clearance@clutch_drive:clearance_gap=0.0005", [0.3, 1.0])
     assert "hardening" not in cmp.amplitude["classes"]
+
+
+
+def test_the_thd_of_a_noisy_linear_record_is_its_noise_floor():
+    """The comparison's ``thd_floor`` (:func:`sensfw.measure.distortion.thd_floor`): the
+    noise-free record of a linear model against the same record with white output noise
+    of 3 %. The measured THD is then all noise, so it must read as its floor within the
+    4.5 dB of one noise realisation against another (the floor test above), while the
+    model's own THD (numerical, ~0) is tens of dB below both: the bias that the residual
+    vector's THD entry carries at low levels (``bench/whitening.py``)."""
+    from dataclasses import replace
+
+    from sensfw.excitation import Chirp
+    from sensfw.measure.compare import compare_level
+    from sensfw.models.analytic import TwoDOF
+
+    model = TwoDOF()
+    sig = model.simulate(model.parameters().nominal(),
+                         Chirp(50, 2000, 0.15, 20000.0, 1.0, tail=0.02))
+    y = sig.channels["a1"]
+    for seed in (3, 7):
+        noisy = replace(sig, channels={"a1": y + 0.03 * np.std(y) * np.random.default_rng(
+            seed).standard_normal(len(y))})
+        c = compare_level(noisy, sig, "a1", (50.0, 2000.0), 1.0, detail=False)
+        assert 20 * np.log10(c.thd_measured / c.thd_floor) == pytest.approx(0.0, abs=4.5)
+        assert 20 * np.log10((c.thd_model or 1e-9) / c.thd_measured) < -20
+        assert c.to_dict()["thd"]["measured_noise_floor"] == c.thd_floor
