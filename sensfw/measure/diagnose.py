@@ -365,7 +365,7 @@ def _stopped_short(h: Hypothesis) -> bool:
     batch or two at every level): not known to be at its optimum."""
     refinement = h.fit.info.get("refinement") or []
     return not discrepancy.fits(h.fit.best.w, h.k) and (
-        not refinement or any("max evals" in str(r.get("message", "")) for r in refinement))
+        not refinement or any(r.get("budget_spent") for r in refinement))
 
 
 def _nest(h0: Hypothesis, calibrated: Sequence[Hypothesis]) -> None:

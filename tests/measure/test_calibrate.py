@@ -77,24 +77,25 @@ def test_calibration_finds_the_least_squares_optimum_with_laplace_intervals(refi
 @pytest.mark.parametrize("refine", ["dfols", "lm"])
 def test_a_refinement_stopped_by_its_budget_says_so_in_dfols_words(refine):
     """Diagnosis refines a hypothesis further only where its refinement ended on the budget
-    ("max evals" in the message, DFO-LS's words): both solvers must report it so, and
-    neither where it converged. From a = 1, tau = 0.3 six points do not reach the optimum
-    (chi2 > 2x scipy's), 40 do."""
+    (``budget_spent``; "max evals" in the message, DFO-LS's words): both solvers must
+    report it so, and neither where it converged. From a = 1, tau = 0.3 six points do not
+    reach the optimum (chi2 > 2x scipy's), 40 do."""
     coords, evaluate, t, y, _ = decay_problem()
     start = {"a": 1.0, "tau": 0.3}
     ref = least_squares(lambda x: (x[0] * np.exp(-t / x[1]) - y) / 0.02, [1.0, 0.3],
                         bounds=([0.5, 0.01], [5.0, 1.0]))
-    messages = {}
+    messages, spent = {}, {}
     for budget in (6, 40):
         fit = calibrate(evaluate, coords, budget, evidence=[start_trial(evaluate, start)],
                         refine=refine, global_share=0.0, n_design=0)
         messages[budget] = " ".join(r["message"] for r in fit.info["refinement"])
+        spent[budget] = any(r["budget_spent"] for r in fit.info["refinement"])
         if budget == 6:
             assert fit.chi2 > 2 * float(np.sum(ref.fun**2))
         else:
             assert fit.chi2 == pytest.approx(float(np.sum(ref.fun**2)), rel=1e-2)
-    assert "max evals" in messages[6]
-    assert "max evals" not in messages[40]
+    assert "max evals" in messages[6] and spent[6]
+    assert "max evals" not in messages[40] and not spent[40]
 
 
 def sine_problem():

@@ -131,7 +131,8 @@ def test_the_runner_up_is_refined_only_where_it_stopped_on_its_budget(monkeypatc
     def setup(message, scale, lead_scale=1.5):
         for h, s in ((lead, lead_scale), (second, scale), (third, 20.0)):
             h.fit = Fit(h.coords, Trial({"extra_damping": 0.2}, np.full(n, s)), None,
-                        info={"refinement": [{"nf": 11, "message": message}]})
+                        info={"refinement": [{"nf": 11, "message": message,
+                                              "budget_spent": "max evals" in message}]})
         calls.clear()
         diagnose._finish_runner_up(_Entries(n), [third, lead, second], {},
                                    log=lambda s: None)
@@ -158,7 +159,8 @@ def test_the_named_are_refined_while_they_stop_on_their_budget(monkeypatch):
     import sensfw.measure.diagnose as diagnose
 
     n = 40
-    maxed = [{"nf": 11, "message": "Warning (max evals): Objective has been called MAXFUN"}]
+    maxed = [{"nf": 11, "message": "Warning (max evals): Objective has been called MAXFUN",
+              "budget_spent": True}]
     lead, tied, third, twin = (hypothesis("damping", p) for p in
                                ("bearing_l1", "bearing_l3", "flange", "driveshaft"))
     calls = []
@@ -201,7 +203,8 @@ def test_the_named_are_refined_while_they_stop_on_their_budget(monkeypatch):
     assert twin.fit.values == lead.fit.values and twin.fit.info["twin_of"] == lead.name
 
     calls.clear()  # converged, or at the noise: its optimum, nothing to refine
-    fit(lead, 1000.0, [{"nf": 9, "message": "Success: rho has reached rhoend"}])
+    fit(lead, 1000.0, [{"nf": 9, "message": "Success: rho has reached rhoend",
+                        "budget_spent": False}])
     fit(tied, float(n), maxed)
     diagnose._polish_named(Res(), [lead, tied], {}, log=lambda s: None)
     assert calls == []

@@ -169,7 +169,8 @@ def _calibrate(evaluate, coords, budget, evidence, fixed, q, design_box, n_desig
         worst = max(t.chi2 for t in pool)
         failed = np.full(len(best.w), np.sqrt(4 * worst / len(best.w)))
         refined = dfols_solves(run_coded, starts, budgets, failed, log=log)
-    info["refinement"] = [{k: v for k, v in r.items() if k in ("nf", "message", "error")}
+    info["refinement"] = [{k: v for k, v in r.items()
+                           if k in ("nf", "message", "error", "budget_spent")}
                           for r in refined]
     best = best_of(pool)
     z_best = coords.code(best.values)

@@ -78,7 +78,8 @@ def dfols_solves(evaluate: EvaluateCoded, starts: Sequence[np.ndarray], budgets:
     """DFO-LS from each of ``starts`` (coded) with at most ``budgets[i]`` evaluations, the
     solves run at once (:class:`Batcher`). A failed simulation answers ``failed`` (a
     residual vector worse than any seen), which the trust region then avoids. Returns per
-    start: ``x``, ``w``, ``jacobian`` (coded), ``nf`` and DFO-LS's exit message."""
+    start: ``x``, ``w``, ``jacobian`` (coded), ``nf``, DFO-LS's exit message and
+    ``budget_spent`` (it stopped on ``budgets[i]``, not on its own criteria)."""
     import dfols
 
     batcher = Batcher(evaluate, len(starts))
@@ -100,7 +101,8 @@ def dfols_solves(evaluate: EvaluateCoded, starts: Sequence[np.ndarray], budgets:
                               user_params={"logging.save_diagnostic_info": False})
             out[i] = {"x": np.asarray(res.x, float), "w": np.asarray(res.resid, float),
                       "jacobian": None if res.jacobian is None else
-                      np.asarray(res.jacobian, float), "nf": int(res.nf), "message": res.msg}
+                      np.asarray(res.jacobian, float), "nf": int(res.nf), "message": res.msg,
+                      "budget_spent": res.flag == res.EXIT_MAXFUN_WARNING}
         except BaseException as err:  # reported, never a hang of the serving thread
             out[i] = {"error": f"{type(err).__name__}: {err}"}
         finally:
@@ -136,9 +138,9 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
     the damping raised a hundredfold after each failed pair (Levenberg 1944, Marquardt
     1963); four failed pairs halve the difference step; below 1.5 % of the range, or after
     two iterations gaining less than ``tol`` (relative) or 0.5 in chi2, it stops. Returns
-    ``x``, ``w``, ``jacobian``, ``nf`` (points run) and ``message``: DFO-LS's wording,
-    "Warning (max evals)" where the budget or ``max_iter`` ended it, "Success" where it
-    converged."""
+    ``x``, ``w``, ``jacobian``, ``nf`` (points run), ``message`` in DFO-LS's wording
+    ("Warning (max evals)" where the budget or ``max_iter`` ended it, "Success" where it
+    converged) and ``budget_spent`` (the former)."""
     d = len(z0)
     best_z, best_w = np.array(z0, float), np.asarray(w0, float)
     used = 0
@@ -156,9 +158,10 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
     steps = np.full(d, float(step))
     # DFO-LS's wording, so that callers read either solver's exit the same way
     exhausted = f"Warning (max evals): budget of {budget} points"
+    spent = False  # stopped on the budget or max_iter, not on its own criteria
     for it in range(max_iter):
         if not affordable(d + 2):
-            message = exhausted
+            message, spent = exhausted, True
             break
         z, w = best_z, best_w
         pts, h = _jacobian_points(z, steps)
@@ -215,9 +218,11 @@ def levenberg_marquardt(evaluate: EvaluateCoded, z0: np.ndarray, w0: np.ndarray,
             steps = np.maximum(steps / 2, np.minimum(steps, 2e-3))
             lam = 1e-3
         else:
-            message = "Success: LM found no lower point at the smallest difference step" \
-                if affordable(2) else exhausted
+            spent = not affordable(2)
+            message = exhausted if spent else \
+                "Success: LM found no lower point at the smallest difference step"
             break
     else:
-        message = f"Warning (max evals): {max_iter} iterations"
-    return {"x": best_z, "w": best_w, "jacobian": jac, "nf": used, "message": message}
+        message, spent = f"Warning (max evals): {max_iter} iterations", True
+    return {"x": best_z, "w": best_w, "jacobian": jac, "nf": used, "message": message,
+            "budget_spent": spent}
