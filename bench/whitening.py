@@ -20,28 +20,19 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-# bench/signal.py would shadow the standard library's signal module: drop this folder
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+# bench/signal.py would shadow the standard library's signal module: this folder goes last
+HERE = Path(__file__).resolve().parent
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE] + [str(HERE)]
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
 import math  # noqa: E402
 import tempfile  # noqa: E402
 
 import numpy as np  # noqa: E402
+import recovery as rec  # noqa: E402
 
-BENCH = Path(__file__).resolve().parent
 #: band entries grouped by their standard error (dB)
 SIGMA_GROUPS = ((0.0, 0.15), (0.15, 0.3), (0.3, 0.6), (0.6, math.inf))
-
-
-def _recovery():
-    spec = importlib.util.spec_from_file_location("sensfw_bench_recovery",
-                                                  BENCH / "recovery.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def at_truth(study, case: dict, runner) -> dict:
@@ -74,7 +65,6 @@ def main() -> None:
     from sensfw.measure import cases
     from sensfw.runs import Runner, RunStore
 
-    rec = _recovery()
     study = rec.bench_study("quick", short=True)
     store = args.store or Path(tempfile.mkdtemp(prefix="sensfw-whitening-runs-"))
     rows = []
