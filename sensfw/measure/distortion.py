@@ -94,8 +94,7 @@ def thd_floor(h: dict[int, float], floor: dict[int, float] | None) -> float | No
     """The THD (%) that the record's output noise alone reads over the orders of ``h``
     (:func:`harmonic_floor`): noise adds in power, so a model without noise reads as
     ``sqrt(THD_model^2 + floor^2)`` on the rig. None without a floor."""
-    ks = [k for k in (floor or {}) if k >= 2 and k in h]
-    return float(100 * np.sqrt(sum(floor[k] ** 2 for k in ks))) if ks else None
+    return thd({1: 1.0, **{k: v for k, v in (floor or {}).items() if k >= 2 and k in h}})
 
 
 def thd(h: dict[int, float]) -> float | None:
