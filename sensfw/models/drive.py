@@ -105,6 +105,16 @@ class LoadSignal:
 
         f0, b, c, t0 = self._vars
         start_of_step = exu.ConfigurationType.StartOfStep
+        step = self.step
+        # the coefficients of a full step from every half-step time of the table; a full
+        # step between them (Exudyn's retries at a fraction of the step shift the steps after
+        # them) interpolates them linearly, as it would its three values; a shorter step
+        # interpolates its values as it comes
+        tab = self.table()
+        y0, ym, y1 = tab[:-2], tab[1:-1], tab[2:]
+        grid_b = (4.0 * ym - 3.0 * y0 - y1) / step
+        grid_c = 2.0 * (y1 - 2.0 * ym + y0) / (step * step)
+        last, half = len(grid_b) - 2, step / 2
 
         def prestep(mbs, t):
             if before is not None:
@@ -113,11 +123,19 @@ class LoadSignal:
             # the start-of-step configuration's time (adaptive steps vary, checked in
             # tests/models/test_drive.py)
             ta = mbs.systemData.GetTime(start_of_step)
-            h = t - ta if t > ta else self.step
-            y0, ym, y1 = self._at(ta), self._at(ta + h / 2), self._at(ta + h)
-            f0.SetValue(y0)
-            b.SetValue((4.0 * ym - 3.0 * y0 - y1) / h)
-            c.SetValue(2.0 * (y1 - 2.0 * ym + y0) / (h * h))
+            h = t - ta if t > ta else step
+            x = ta / half
+            j = int(x)
+            if abs(h - step) < 1e-6 * step and j <= last:
+                f = x - j
+                f0.SetValue(float(y0[j] + f * (y0[j + 1] - y0[j])))
+                b.SetValue(float(grid_b[j] + f * (grid_b[j + 1] - grid_b[j])))
+                c.SetValue(float(grid_c[j] + f * (grid_c[j + 1] - grid_c[j])))
+            else:
+                v0, vm, v1 = self._at(ta), self._at(ta + h / 2), self._at(ta + h)
+                f0.SetValue(v0)
+                b.SetValue((4.0 * vm - 3.0 * v0 - v1) / h)
+                c.SetValue(2.0 * (v1 - 2.0 * vm + v0) / (h * h))
             t0.SetValue(ta)
             return True
 

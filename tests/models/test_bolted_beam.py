@@ -281,3 +281,35 @@ def test_deterministic_in_process_and_across_workers():
     for ch in m.sensors:
         assert np.array_equal(a.channels[ch], b.channels[ch])
         assert np.array_equal(a.channels[ch], c.channels[ch])
+
+
+def test_a_quiet_tail_ends_the_run_and_leaves_the_frf_as_it_was(monkeypatch):
+    """A sweep's silent tail is integrated only while the beam still rings
+    (``simulation.solve``): the run stops once its kinetic energy is ``QUIET`` (70 dB) below
+    its peak, with every sample before the stop the full run's and zeros after. The
+    reference is the same run integrated to the end (``QUIET = 0`` never stops)."""
+    from sensfw.models.bolted_beam import simulation
+
+    m = BoltedBeam()
+    # what the sweep leaves ringing (the first bending mode, 18 Hz, too: its start and end
+    # are abrupt) at a damping ratio of 0.01 is quiet about 3 s into the tail
+    ex = LinearSweep(85.0, 100.0, 1.0, 1024.0, 1.0, tail=5.0)
+    quiet = m.simulate(NOMINAL, ex, GA)
+    monkeypatch.setattr(simulation, "QUIET", 0.0)
+    full = m.simulate(NOMINAL, ex, GA)
+    stop = quiet.meta["quiet_from"]
+    assert full.meta["quiet_from"] is None
+    assert 1.0 < stop < 5.0, stop  # in the tail, well before its end
+    n = int(stop * ex.fs) - 1
+    for ch in m.sensors:
+        assert np.array_equal(quiet.channels[ch][:n], full.channels[ch][:n]), ch
+        assert not np.any(quiet.channels[ch][n + 2:]), ch
+        # what the stop leaves out: 70 dB down in energy over the structure, and a point's
+        # velocity or acceleration may carry more than its share: 50 dB down on the peak
+        left = np.max(np.abs(full.channels[ch][n:])) / np.max(np.abs(full.channels[ch]))
+        assert left < 10 ** (-50 / 20), (ch, left)
+    f, Hq = frf(quiet.force, quiet.channels["Laser"], quiet.fs, estimator="H1")
+    _, Hf = frf(full.force, full.channels["Laser"], full.fs, estimator="H1")
+    band = (f > 85) & (f < 100)
+    db = 20 * np.log10(np.abs(Hq[band]) / np.abs(Hf[band]))
+    assert np.max(np.abs(db)) < 1e-3, np.max(np.abs(db))

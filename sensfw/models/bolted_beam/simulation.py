@@ -3,7 +3,8 @@
 The reduced beams are one ``ObjectGenericODE2`` whose nodes are a ``NodePoint2D`` per
 boundary point (its coordinates are the point's physical displacement) and one
 ``NodeGenericODE2`` with the fixed-interface modal coordinates; its mass, stiffness and
-damping matrices are the Craig-Bampton ones. Bodies added by effects are
+damping matrices are the Craig-Bampton ones, and its Jacobian is ``K`` and ``D`` themselves
+(:data:`REDUCED_JACOBIAN`). Bodies added by effects are
 ``ObjectMassPoint2D``. Every force element is an ``ObjectConnectorCartesianSpringDamper``
 between ``MarkerNodePosition`` markers (ground points: ``MarkerBodyPosition`` on the
 ground) with a *symbolic* user function, as in the planar models
@@ -14,7 +15,8 @@ Time integration: Exudyn's implicit generalised-alpha (Chung & Hulbert 1993) at 
 step, or an explicit Runge-Kutta method (see :class:`~.model.BoltedBeam` for why implicit).
 A step whose Newton iteration fails is retried by Exudyn at half the step, at most
 ``STEP_REDUCTIONS`` times; one that fails at the smallest of them ends the run with
-``exudyn.SolverError`` at once (see :func:`solve`).
+``exudyn.SolverError`` at once (see :func:`solve`). A record's silent tail is integrated
+only while the structure still rings (:data:`QUIET`).
 
 (Over the usual 400 lines: building the Exudyn system and solving it share the node,
 marker and connector bookkeeping of one structure; apart, the solver would reach into the
@@ -34,6 +36,19 @@ from ..planar.exudyn import Built, link_function, load_function, user_function
 from .assembly import Structure
 
 IMPLICIT = ("GeneralizedAlpha", "TrapezoidalIndex2")
+#: a drive is silent where it stays below this fraction of its peak to the record's end
+SILENT = 1e-2
+#: the run stops once the drive is silent and the structure's kinetic energy, its largest
+#: over two periods of the lowest mode, has fallen below this fraction of the run's largest
+#: (an amplitude 70 dB down; see :func:`solve`)
+QUIET = 1e-7
+#: how Exudyn gets the reduced beams' Jacobian: ``"exact"`` (a Jacobian user function whose
+#: part is zero, to which Exudyn adds ``K`` and ``D``: the GenericODE2 has no force of its
+#: own) or ``"numerical"`` (Exudyn's default for a GenericODE2 without one: 2 n evaluations
+#: of its n x n forces, O(n^3), 80 % of a Newton Jacobian's cost with n = 31). The same
+#: Jacobian up to the differentiation's error; the micro-slip model renews it at nearly
+#: every step where its sliders slip (``bench/beam_runs.py`` times both)
+REDUCED_JACOBIAN = "exact"
 #: relative residual at which Newton stops (see :func:`solve`)
 NEWTON_TOLERANCE = 1e-6
 #: absolute residual (N, L2 norm over the coordinates) at which Newton stops, per N of the
@@ -67,6 +82,12 @@ class BeamBuilt(Built):
 
     residual_floor: float = 0.0
     steps: int = 0
+    #: mass matrix over the coordinates (kinetic energy of the quiet tail, :func:`solve`)
+    mass: np.ndarray | None = None
+    #: the lowest eigenfrequency (Hz) of the structure linearised at the static state
+    lowest_hz: float = 0.0
+    #: when :func:`solve` stopped a quiet tail (s; None: it ran to the end)
+    stopped_at: float | None = None
 
 
 def residual_floor(structure: Structure, z0: np.ndarray) -> float:
@@ -109,6 +130,19 @@ def residual_floor(structure: Structure, z0: np.ndarray) -> float:
     return float(np.linalg.norm(np.abs(K_c) @ (np.finfo(float).eps * p)))
 
 
+def lowest_mode(structure: Structure, z0: np.ndarray) -> tuple[np.ndarray, float]:
+    """The mass matrix over the coordinates and the lowest eigenfrequency (Hz) of the
+    structure linearised at ``z0`` (0 where it has no positive one)."""
+    import scipy.linalg as sl
+
+    M, K, _ = structure.linear_matrices(z0)
+    try:
+        w2 = sl.eigh(K, M, eigvals_only=True, subset_by_index=[0, 0])[0]
+    except (np.linalg.LinAlgError, ValueError):
+        return M, 0.0
+    return M, float(np.sqrt(w2) / (2 * np.pi)) if w2 > 0 else 0.0
+
+
 def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
           loads: Sequence[tuple[str, float, Callable]] = (),
           sensors: Sequence[SensorSpec] = (), user_functions: str = "symbolic") -> BeamBuilt:
@@ -138,9 +172,15 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
             numberOfODE2Coordinates=nm, referenceCoordinates=[0.0] * nm,
             initialCoordinates=list(z0[nb:nb + nm]), initialCoordinates_t=[0.0] * nm)))
     ns = structure.n_struct
+    jacobian: list = []
+    if REDUCED_JACOBIAN == "exact":  # Exudyn adds K and D to the function's zero
+        zero = exu.MatrixContainer(np.zeros((ns, ns)))
+        jacobian = [lambda mbs, t, item, q, q_t, f_ode2, f_ode2_t: zero, zero]
+    elif REDUCED_JACOBIAN != "numerical":
+        raise ValueError(f"REDUCED_JACOBIAN {REDUCED_JACOBIAN!r}: exact or numerical")
     mbs.AddObject(ei.ObjectGenericODE2(
         nodeNumbers=node_list, massMatrix=structure.red.M, stiffnessMatrix=structure.red.K,
-        dampingMatrix=D[:ns, :ns]))
+        dampingMatrix=D[:ns, :ns], jacobianUserFunction=jacobian[0] if jacobian else 0))
     for b in structure.bodies:
         j = structure.body_index[b]
         ref = structure.reference(b, (0.0, 0.0))
@@ -156,7 +196,7 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
         key = body if body in structure.body_index else f"{body}@{round(float(r[0]), 9)!r}"
         return mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=nodes[key]))
 
-    keep: list = []
+    keep: list = jacobian
     jenkins = [ln for ln in a.links if ln.jenkins is not None]
     sliders = JenkinsSliders(jenkins, user_functions) if jenkins else None
     for ln in a.links:
@@ -193,6 +233,7 @@ def build(structure: Structure, z0: np.ndarray, D: np.ndarray, contact, ops,
     mbs.Assemble()
     built = BeamBuilt(SC=SC, mbs=mbs, sensors=handles, q0=z0, keep=keep,
                       residual_floor=residual_floor(structure, z0))
+    built.mass, built.lowest_hz = lowest_mode(structure, z0)
     if sliders is not None:
         def coordinate_index(body, r, axis):
             if body == a.ground:
@@ -233,7 +274,7 @@ class JenkinsSliders:
         serial = next(_serial)
         self.vars = ([exu.symbolic.Real(f"sensfw_jenkins_{serial}_{i}", 0.0) for i in range(n)]
                      if kind == "symbolic" else None)
-        self.index0 = self.index1 = self.rest = None
+        self.B = self.rest = None
 
     def law(self, i: int):
         """The force law of element ``i`` (a :class:`~sensfw.models.planar.Link` law)."""
@@ -251,16 +292,24 @@ class JenkinsSliders:
         return jenkins
 
     def attach(self, mbs, coordinate_index) -> None:
-        """Read the elements' slips from the system's coordinates (after ``Assemble``):
+        """Read the elements' slips from the system's coordinates (after ``Assemble``;
+        ``mbs`` None: the coordinates are those ``coordinate_index`` names):
         ``coordinate_index(body, r, axis)`` is the global ODE2 index of a point's coordinate
         (``None`` on the ground)."""
         def idx(body, r, ln):
             axis = 0 if ln.jenkins[2] == (1.0, 0.0) else 1
-            i = coordinate_index(body, r, axis)
-            return -1 if i is None else i
+            return coordinate_index(body, r, axis)
 
-        self.index0 = np.array([idx(ln.body0, ln.r0, ln) for ln in self.links])
-        self.index1 = np.array([idx(ln.body1, ln.r1, ln) for ln in self.links])
+        ends = [[(idx(body, r, ln), sign) for body, r, sign in
+                 ((ln.body1, ln.r1, 1.0), (ln.body0, ln.r0, -1.0))] for ln in self.links]
+        n_q = (mbs.systemData.ODE2Size() if mbs is not None else
+               1 + max(i for e in ends for i, _ in e if i is not None))
+        # slip = B q - rest: +1 at the second point's coordinate, -1 at the first's
+        self.B = np.zeros((len(self.links), n_q))
+        for e, pair in enumerate(ends):
+            for i, sign in pair:
+                if i is not None:
+                    self.B[e, i] += sign
         self.rest = np.array([(ln.offset or (0.0, 0.0))[0 if ln.jenkins[2] == (1.0, 0.0)
                                                          else 1] for ln in self.links])
 
@@ -269,12 +318,12 @@ class JenkinsSliders:
         slider moves only where the elastic trial force ``k (s - x)`` exceeds its slip
         force, to where that force is the slip force (a stuck slider keeps ``x``; only the
         moved ones are passed to the symbolic variables)."""
-        qe = np.append(np.asarray(q, float), 0.0)  # index -1: the ground
-        s = qe[self.index1] - qe[self.index0] - self.rest
+        s = self.B @ q - self.rest
         trial = self.k * (s - self.x)
-        moved = np.flatnonzero(np.abs(trial) > self.force)
-        if not moved.size:
+        over = np.abs(trial) > self.force
+        if not over.any():
             return
+        moved = np.flatnonzero(over)
         x = s[moved] - np.copysign(self.force[moved], trial[moved]) / self.k[moved]
         self.x[moved] = x
         if self.vars is not None:
@@ -291,6 +340,44 @@ class JenkinsSliders:
 
 
 _serial = itertools.count()
+
+
+def silence(force: np.ndarray, fs: float) -> float | None:
+    """When (s) the drive ``force`` (samples at ``fs``) falls silent for good: below
+    :data:`SILENT` of its peak from there to its end (None: it never does)."""
+    loud = np.flatnonzero(np.abs(force) > SILENT * np.max(np.abs(force)))
+    if not len(loud) or loud[-1] >= len(force) - 1:
+        return None
+    return (loud[-1] + 1) / fs
+
+
+def quiet_stop(built: BeamBuilt, silent_from: float, fs: float) -> Callable:
+    """The pre-step function (calling the system's own first) that ends a run in its silent
+    tail once the structure is quiet (:func:`solve`)."""
+    from collections import deque
+
+    before, mass = built.prestep, built.mass
+    recent: deque = deque(maxlen=max(2, int(np.ceil(2.0 * fs / built.lowest_hz))))
+    state = {"next": 0.0, "peak": 0.0}
+
+    def prestep(mbs, t):
+        if before is not None:
+            before(mbs, t)
+        if t < state["next"]:
+            return True
+        state["next"] = t + 1.0 / fs
+        v = mbs.systemData.GetODE2Coordinates_t()
+        e = float(v @ mass @ v)
+        state["peak"] = max(state["peak"], e)
+        recent.append(e)
+        if (t > silent_from and len(recent) == recent.maxlen
+                and max(recent) < QUIET * state["peak"]):
+            built.stopped_at = t
+            return False
+        return True
+
+    built.keep.append(prestep)
+    return prestep
 
 
 def failure(solver, ss, method: str, exc: Exception) -> str:
@@ -335,7 +422,8 @@ def newton_tolerance(force_scale: float, floor: float) -> float:
 
 def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
           spectral_radius: float = 0.8, force_scale: float = 1.0,
-          newton: str = "modified") -> dict[str, np.ndarray]:
+          newton: str = "modified", silent_from: float | None = None
+          ) -> dict[str, np.ndarray]:
     """Integrate at the step ``1 / (fs substeps)`` (smaller steps where Newton fails, see
     below) and return every sensor's ``n_out`` samples at ``fs``; raises
     ``exudyn.SolverError`` or returns short/non-finite channels when the solver fails.
@@ -363,7 +451,17 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
     ``exudyn.SolverError`` naming the time and Newton's residual. The caller decides (the
     model retries with full Newton, then reports a divergence, which the runs' step
     halving, ``[solver] halvings``, retries at half the step). The steps taken are in
-    ``built.steps`` (the planned ``n_out substeps`` plus the retried ones)."""
+    ``built.steps`` (the planned ``n_out substeps`` plus the retried ones).
+
+    A record's silent tail (the drive below :data:`SILENT` of its peak from ``silent_from``
+    s to the end: a sweep's 8 s of silence on the rig) is integrated only while the
+    structure rings: the run stops once the kinetic energy, its largest over the last two
+    periods of the lowest mode (sampled at ``fs``), is below :data:`QUIET` of the run's
+    largest, and the rest of every channel is zero (``built.stopped_at``). The window holds
+    every mode's largest kinetic energy at least once, so the energy left is at most the
+    number of ringing modes times that fraction; in free vibration it only falls from there.
+    On the UNESP-BERT sweeps that stops the linear model near 10.5 s of 16 and a slipping
+    micro-slip joint near 12.5 s."""
     import exudyn as exu
 
     mbs, SC = built.mbs, built.SC
@@ -404,6 +502,9 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
     else:
         ti.explicit.computeEndOfStepAccelerations = False
         ti.discontinuous.useRecommendedStepSize = False
+    built.stopped_at = None
+    if silent_from is not None and built.lowest_hz > 0 and built.mass is not None:
+        mbs.SetPreStepUserFunction(quiet_stop(built, silent_from, fs))
     try:
         try:
             ok = mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, method))
@@ -413,10 +514,12 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
         channels = {}
         # the step index is one past the last step taken (it starts at 1)
         built.steps = int(mbs.sys["dynamicSolver"].it.currentStepIndex) - 1
-        if ok is not False:
+        if ok is not False or built.stopped_at is not None:
             for name, (s, comp) in built.sensors.items():
-                data = np.asarray(mbs.GetSensorStoredData(s))
-                channels[name] = np.ascontiguousarray(data[:n_out, 1 + comp])
+                data = np.asarray(mbs.GetSensorStoredData(s))[:n_out, 1 + comp]
+                if built.stopped_at is not None:  # the quiet tail: nothing left to see
+                    data = np.concatenate([data, np.zeros(n_out - len(data))])
+                channels[name] = np.ascontiguousarray(data)
         return channels
     finally:
         mbs.Reset()
