@@ -60,3 +60,29 @@ def test_unknown_backend_is_a_clear_error(tmp_path):
 
     with pytest.raises(SensfwError, match=r"unknown execution backend 'gpu'.*serial"):
         Runner(RunStore(tmp_path), backend="gpu").run(specs([{"x1": 0.0}, {"x1": 1.0}]))
+
+
+def test_a_pool_sends_the_longest_runs_first():
+    """Graham's LPT rule: a batch goes out longest first, each run's length expected from
+    the last run of its kind (everything but the parameter values) the pool made; kinds it
+    has not seen go first, and runs the pool cannot tell apart keep their order."""
+    from sensfw.runs.executor import ProcessPool, run_kind
+
+    m = models.get(FAULT_INJECTION)(**FAULTS)
+    ref = {"name": FAULT_INJECTION, "options": FAULTS}
+
+    def spec(x1, ex):
+        return RunSpec.create(m, m.parameters().complete({"x1": x1}), ex, SolverSettings(),
+                              ref)
+
+    short, long_, new = EX, Chirp(50, 500, 0.1, 4000, 1.0), Chirp(50, 500, 0.2, 4000, 1.0)
+    with ProcessPool(1) as pool:
+        first = [spec(0.1, short), spec(0.2, long_)]
+        pool.map(first, lambda s, r: None)
+        # what the pool learnt: the wall time of each kind's run
+        assert set(pool._walls) == {run_kind(s) for s in first}
+        pool._walls[run_kind(first[0])], pool._walls[run_kind(first[1])] = 0.1, 5.0
+        batch = [spec(0.3, short), spec(0.4, long_), spec(0.5, short), spec(0.6, new),
+                 spec(0.7, long_)]
+        got = [s.params["x1"] for s in pool.order(batch)]
+    assert got == [0.6, 0.4, 0.7, 0.3, 0.5]
