@@ -460,7 +460,7 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
     largest, and the rest of every channel is zero (``built.stopped_at``). The window holds
     every mode's largest kinetic energy at least once, so the energy left is at most the
     number of ringing modes times that fraction; in free vibration it only falls from there.
-    On the UNESP-BERT sweeps that stops the linear model near 10.5 s of 16 and a slipping
+    On the UNESP-BERT sweeps that stops the linear model near 9.8 s of 16 and a slipping
     micro-slip joint near 12.5 s."""
     import exudyn as exu
 
