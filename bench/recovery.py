@@ -81,9 +81,10 @@ def bench_study(name: str, short: bool = False):
 
 
 def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
-             store: Path | None = None, from_nominal: float | None = None) -> dict:
+             store: Path | None = None, from_nominal: float | None = None,
+             budget_scale: float = 1.0) -> dict:
     from sensfw.measure import cases, discrepancy
-    from sensfw.measure.diagnose import diagnose
+    from sensfw.measure.diagnose import default_budget, diagnose
     from sensfw.measure.prepared import load_measurements
     from sensfw.runs import Runner, RunStore
 
@@ -94,6 +95,8 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
                 workers=workers) as runner:
         local, global_phase = METHODS[method]
         extra = {} if from_nominal is None else {"from_nominal": from_nominal}
+        if budget_scale != 1.0:
+            extra["budget"] = round(budget_scale * default_budget(len(meas)))
         res = diagnose(study, meas, runner, log=log, local=local, global_phase=global_phase,
                        **extra)
         wall = time.perf_counter() - t0
@@ -117,7 +120,7 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
            "noise_reached": chi2_true_cal / n <= 1 + 3 * math.sqrt(2 / n),
            "truth_fits_noise": discrepancy.fits(w, k_true) if w is not None else False,
            "simulations": res.n_simulations, "by_step": res.simulations_by_step,
-           "wall_s": wall, **where}
+           "wall_s": wall, "budget_scale": budget_scale, **where}
     return judged(row)
 
 
@@ -167,7 +170,9 @@ def truth_in_screen(rows: list[dict], truth: str) -> dict:
 def summary(rows: list[dict]) -> None:
     by = {}
     for r in map(judged, rows):
-        by.setdefault(f"{r.get('study', 'quick')}, method {r['method']}", []).append(r)
+        scale = r.get("budget_scale", 1.0)
+        by.setdefault(f"{r.get('study', 'quick')}, method {r['method']}" + (
+            f", budget x{scale:g}" if scale != 1.0 else ""), []).append(r)
     for key, rs in by.items():
         print(f"{key}: {len(rs)} cases")
         counts: dict = {}
@@ -266,6 +271,9 @@ def main() -> None:
                     help="diagnose's from_nominal (coded distance of H0's optimum from the "
                          "nominal values beyond which the first look also starts there; "
                          "'inf': never, as before stop 39)")
+    ap.add_argument("--budget-scale", type=float, default=1.0,
+                    help="diagnose's budget as this multiple of its default (150 + 50 per "
+                         "level): what the rates cost in simulations")
     args = ap.parse_args()
     if args.merge:
         summary(read_parts(args.merge))
@@ -279,7 +287,7 @@ def main() -> None:
         case["study"] = study.name
         r = run_case(study, case, args.method, args.workers,
                      log=print if args.verbose else (lambda s: None), store=args.store,
-                     from_nominal=args.from_nominal)
+                     from_nominal=args.from_nominal, budget_scale=args.budget_scale)
         r["store"] = str(args.store) if args.store else None
         r["from_nominal"] = args.from_nominal
         truth = f"{case['effect']}@{case['place']}" if case["effect"] else "no effect"
