@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -69,6 +69,24 @@ STEP_REDUCTIONS = 6
 #: step; Exudyn's default contractivity ended such runs at stick-slip transitions.
 PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12,
            "maxModifiedNewtonRestartIterations": 30}
+#: modified Newton's limits for ``newton="modified"``: a Jacobian renewed after three
+#: iterations without convergence (Exudyn: eight, or a contraction above 0.5) and a step
+#: given up after ten (Exudyn: 25). The micro-slip joint's Jenkins sliders are piecewise
+#: linear: where one switches inside a step, a Jacobian of the old pattern converges at
+#: 0.3-0.5 per iteration (nine iterations before Exudyn renews it), or Newton diverges into
+#: a state where the sliders slip and the residual no longer moves (a contraction of
+#: exactly 1 with fresh Jacobians, full Newton included) and spends 25 iterations, nearly
+#: every one with a new Jacobian, before Exudyn halves the step: 4150 such steps cost 100 000
+#: of the 130 000 Jacobians of the 0.30 V record's run. ``bench/beam_newton.py`` (the rig's
+#: sweep at the 0.05 / 0.15 / 0.30 V forces, against an eighth of the step): micro-slip
+#: model 1.20 / 1.30 / 1.45x faster, the laser 3.3 / 3.9 / 4.2 % from the reference
+#: against 3.3 / 3.4 / 3.2 % (0.20-0.38 dB against 0.20-0.25 dB over 80-105 Hz); with the
+#: dry friction of the second round 1.46 / 1.46 / 1.27x, 3.8 / 3.0 / 4.7 % against
+#: 4.2 / 3.1 / 4.1 %; the linear model's runs are the same (one Jacobian, one iteration per
+#: step; its own distance from the reference: 2.3 %, 0.15 dB). Converged steps meet the
+#: same tolerances; which ones are retried at half the step changes, so the runs move
+#: within the step's own discretisation error.
+MODIFIED: dict = {"maxModifiedNewtonIterations": 3, "maxIterations": 10}
 
 #: (name, body, x, quantity "Acceleration" | "Velocity", component) of a sensor
 SensorSpec = tuple[str, str, float, str, int]
@@ -88,6 +106,8 @@ class BeamBuilt(Built):
     lowest_hz: float = 0.0
     #: when :func:`solve` stopped a quiet tail (s; None: it ran to the end)
     stopped_at: float | None = None
+    #: Newton iterations and Jacobians (``iterations``, ``jacobians``) of :func:`solve`
+    newton: dict = field(default_factory=dict)
 
 
 def residual_floor(structure: Structure, z0: np.ndarray) -> float:
@@ -429,8 +449,8 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
     ``exudyn.SolverError`` or returns short/non-finite channels when the solver fails.
     ``force_scale`` is the largest excitation force (N), which scales Newton's absolute
     tolerance (:func:`newton_tolerance`, with the system's ``built.residual_floor``);
-    ``newton`` is ``"modified"`` (Exudyn's defaults: the Jacobian kept while Newton
-    contracts by 0.5 per iteration), ``"patient"`` (kept
+    ``newton`` is ``"modified"`` (the Jacobian kept while Newton contracts by 0.5 per
+    iteration, for three iterations at most, ten in all; see ``MODIFIED``), ``"patient"`` (kept
     while it contracts by 0.9, up to 12 iterations; see ``PATIENT``) or ``"full"`` (a new
     Jacobian at every iteration; see :meth:`~.model.BoltedBeam.simulate`). Always resets
     the system.
@@ -446,8 +466,8 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
     :func:`newton_tolerance`) crawl through the record at ~2 ms of signal per second
     without an error until the run's timeout (300 s). Here the smallest step is the run's
     step / 2**``STEP_REDUCTIONS`` (1/64: one halving below the deepest retry measured), so
-    such a step fails after seven attempts (the step and six halvings) of 25 Newton
-    iterations each, in milliseconds:
+    such a step fails after seven attempts (the step and six halvings) of at most 25
+    Newton iterations each (ten with ``MODIFIED``), in milliseconds:
     ``exudyn.SolverError`` naming the time and Newton's residual. The caller decides (the
     model retries with full Newton, then reports a divergence, which the runs' step
     halving, ``[solver] halvings``, retries at half the step). The steps taken are in
@@ -483,9 +503,9 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
         if newton not in ("modified", "patient", "full"):
             raise ValueError(f"newton {newton!r}: modified, patient or full")
         ti.newton.useModifiedNewton = newton != "full"
-        if newton == "patient":
-            for key, value in PATIENT.items():
-                setattr(ti.newton, key, value)
+        for key, value in (PATIENT if newton == "patient" else
+                           MODIFIED if newton == "modified" else {}).items():
+            setattr(ti.newton, key, value)
         # one Newton step solves a linear step to ~1e-7 (the connectors' numerical
         # Jacobian); Exudyn's default 1e-8 forced a second step and a Jacobian update every
         # other step (6x slower for the same signals)
@@ -513,7 +533,10 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
                 from None
         channels = {}
         # the step index is one past the last step taken (it starts at 1)
-        built.steps = int(mbs.sys["dynamicSolver"].it.currentStepIndex) - 1
+        it = mbs.sys["dynamicSolver"].it
+        built.steps = int(it.currentStepIndex) - 1
+        built.newton = {"iterations": int(it.newtonStepsCount),
+                        "jacobians": int(it.newtonJacobiCount)}
         if ok is not False or built.stopped_at is not None:
             for name, (s, comp) in built.sensors.items():
                 data = np.asarray(mbs.GetSensorStoredData(s))[:n_out, 1 + comp]
