@@ -60,7 +60,8 @@ def test_a_tiny_random_drive_runs_with_the_stiffest_joint_and_stays_linear():
     """The suite's drive that hung (0.25 s of signal: two minutes of the old crawl, past the
     runs' 60 s timeout) runs at its step, none retried smaller, with modified Newton, and the
     response is linear in the drive: the laser signal at 0.5 mV RMS times ten is the one at
-    5 mV RMS within 1e-4 of its RMS. Bound: Newton stops at most at its tolerance, 2 x 7.9e-7
+    5 mV RMS within 1e-4 of its RMS, with one Jacobian and one Newton iteration per step.
+    Bound: Newton stops at most at its tolerance, 2 x 7.9e-7
     N here, an error force at most 6e-5 of the drive's RMS (0.028 N) at each step; measured
     1e-9 (one modified Newton iteration solves the linear model's step to the round-off
     floor)."""
@@ -78,6 +79,10 @@ def test_a_tiny_random_drive_runs_with_the_stiffest_joint_and_stays_linear():
         assert res.signals.meta["newton"] == "modified"
         assert res.signals.meta["step"] == 1 / 8192
         assert res.signals.meta["steps"] == 0.25 * 8192  # no step retried smaller
+        # a linear system: modified Newton keeps its first Jacobian and solves each step in
+        # one iteration (the counts the runs report, bench/beam_newton.py)
+        assert res.signals.meta["newton_jacobians"] == 1
+        assert res.signals.meta["newton_iterations"] == 0.25 * 8192
         runs[rms] = res.signals.channels["Laser"]
     small, large = 10 * runs[0.5e-3], runs[5e-3]
     assert np.sqrt(np.mean(large**2)) > 1e-5  # m/s: a response, not numerical noise
