@@ -12,12 +12,12 @@ forces of the 0.05, 0.15 and 0.30 V records through the linear model, the micro-
 of the README's first round and the micro-slip + dry-friction model of its second
 (``tests/measure/test_bert_loop.py``'s values), once per Newton setting, and against a
 reference at an eighth of the step (Exudyn's defaults). A run whose modified Newton fails
-at some step at every step size the model allows is run again with full Newton (the model's
-fallback, slow: a Jacobian per iteration), which the line says. Per model, level and setting: wall
-seconds and their ratio to Exudyn's defaults in the same run, Newton iterations, Jacobians,
-steps taken (planned 131072 at 1/8192 s for 16 s, less the quiet tail, plus the retried),
-and the laser's distance from the reference (RMS relative, and the largest difference of
-its spectrum over 80-105 Hz, dB)::
+at some step at every step size the model allows is run again with full Newton (the
+model's fallback, slow: a Jacobian per iteration), which the line says. Per model, level
+and setting: wall seconds and their ratio to Exudyn's defaults in the same run, Newton
+iterations, Jacobians, steps taken (planned 131072 at 1/8192 s for 16 s, less the quiet
+tail, plus the retried), and the laser's distance from the reference (RMS relative, and the
+largest difference of its spectrum over 80-105 Hz, dB)::
 
     python bench/beam_newton.py [--levels 2.82,8.46,16.9] [--models linear,micro-slip,dry]
 """
@@ -27,24 +27,21 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-# bench/signal.py would shadow the standard library's signal module that scipy imports
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+# bench/signal.py would shadow the standard library's signal module: this folder goes last
+HERE = Path(__file__).resolve().parent
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE] + [str(HERE)]
 
 import argparse  # noqa: E402  (after the sys.path fix)
 import json  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
-from scipy.signal import welch  # noqa: E402
+from beam_runs import LINEAR, MICRO_SLIP, distance, record  # noqa: E402
 
-from sensfw.excitation import LinearSweep, SampledForce  # noqa: E402
+from sensfw.excitation import SampledForce  # noqa: E402
 from sensfw.models.base import SolverSettings  # noqa: E402
 from sensfw.models.bolted_beam import BoltedBeam, simulation  # noqa: E402
 
-LINEAR = {"clamp_stiffness": 39876.46, "joint_stiffness": 1.0e7, "damping_ratio": 0.015443}
-MICRO_SLIP = {"clamp_stiffness": 50196.56, "joint_stiffness": 9316438.5,
-              "damping_ratio": 0.0061782, "microslip_residual": 0.0113271,
-              "microslip_force": 766.128, "microslip_exponent": -0.359747}
 DRY = {"clamp_stiffness": 22445.56, "joint_stiffness": 8772824.7, "damping_ratio": 0.0059576,
        "microslip_force": 887.469, "microslip_exponent": -0.654005,
        "microslip_residual": 0.0138544, "dry_friction_force": 0.518444,
@@ -61,13 +58,6 @@ SETTINGS = {"Exudyn's defaults": {},
                                             "maxIterations": 8}}
 
 
-def record(level: float) -> SampledForce:
-    sweep = LinearSweep(70.0, 110.0, 8.0, 1024.0, level, tail=8.0)
-    return SampledForce(samples=sweep.force(), fs=1024.0, amplitude=level,
-                        sweep={"kind": "linear_sweep", "f0": 70.0, "f1": 110.0,
-                               "t_start": 0.0, "t_end": 8.0})
-
-
 def run(model: BoltedBeam, p: dict, ex, step: float, settings: dict):
     """Laser signal, wall seconds and the run's meta (Newton's counts, steps)."""
     saved = dict(simulation.MODIFIED)
@@ -82,16 +72,6 @@ def run(model: BoltedBeam, p: dict, ex, step: float, settings: dict):
     finally:
         simulation.MODIFIED.clear()
         simulation.MODIFIED.update(saved)
-
-
-def apart(a: np.ndarray, b: np.ndarray, fs: float = 1024.0) -> tuple[float, float]:
-    """RMS distance relative to ``b`` (%) and the largest difference of the spectra over
-    80-105 Hz (dB)."""
-    f, pa = welch(a, fs, nperseg=1024)
-    _, pb = welch(b, fs, nperseg=1024)
-    band = (f >= 80) & (f <= 105)
-    rms = np.sqrt(np.mean((a - b) ** 2) / np.mean(b**2))
-    return 100 * float(rms), float(np.max(np.abs(10 * np.log10(pa[band] / pb[band]))))
 
 
 def main() -> None:
@@ -122,7 +102,7 @@ def main() -> None:
             for label, s in settings.items():
                 laser, wall, meta = run(model, p, ex, step, s)
                 base = base or wall
-                rms, db = apart(laser, ref)
+                rms, db = distance(laser, ref)
                 row = {"model": name, "level_N": level, "settings": label, "wall_s": wall,
                        "speed-up": base / wall, "iterations": meta["newton_iterations"],
                        "jacobians": meta["newton_jacobians"], "steps": meta["steps"],

@@ -61,10 +61,9 @@ def test_a_tiny_random_drive_runs_with_the_stiffest_joint_and_stays_linear():
     runs' 60 s timeout) runs at its step, none retried smaller, with modified Newton, and the
     response is linear in the drive: the laser signal at 0.5 mV RMS times ten is the one at
     5 mV RMS within 1e-4 of its RMS, with one Jacobian and one Newton iteration per step.
-    Bound: Newton stops at most at its tolerance, 2 x 7.9e-7
-    N here, an error force at most 6e-5 of the drive's RMS (0.028 N) at each step; measured
-    1e-9 (one modified Newton iteration solves the linear model's step to the round-off
-    floor)."""
+    Bound: Newton stops at most at its tolerance, 2 x 7.9e-7 N here, an error force at most
+    6e-5 of the drive's RMS (0.028 N) at each step; measured 1e-9 (one modified Newton
+    iteration solves the linear model's step to the round-off floor)."""
     specs = {rms: RunSpec.create(BoltedBeam(), LINEAR, noise(rms), GA,
                                  {"name": "bolted_beam", "options": {}})
              for rms in (0.5e-3, 5e-3)}

@@ -216,9 +216,9 @@ class BoltedBeam(Model):
         silent_from = simulation.silence(force, excitation.fs)
         # Newton: modified (Jacobian kept while it converges: one iteration per step for the
         # linear model; Jenkins elements switch between stick and slip inside it, where a
-        # contraction above 0.5 renews it; simulation.MODIFIED); where effects added
-        # bodies, modified
-        # with a patient renewal (simulation.PATIENT); a failure is retried with full Newton.
+        # contraction above 0.5 renews it; simulation.MODIFIED); where effects added bodies,
+        # modified with a patient renewal (simulation.PATIENT); a failure is retried with
+        # full Newton.
         # A step that fails with full Newton too, at every step Exudyn may reduce it to
         # (simulation.solve), is a divergence at this step, which the runs retry at half the
         # step (sensfw.runs.spec.simulate_with_halving, [solver] halvings)

@@ -81,8 +81,8 @@ PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12
 #: the micro-slip model 1.20-1.46x faster within the step's own discretisation error
 #: (``bench/beam_newton.py``), but the README's UNESP-BERT loop with it reached a
 #: different second-round verdict ("none": the first look ranked friction@clamp 1033 just
-#: ahead of dry_friction@beam1 1071, and only the first was calibrated; README, "Newton's
-#: limits"), so the runs stay as they were until diagnosis does not hang on such a tie.
+#: ahead of dry_friction@beam1 1071, and only the first was calibrated; README, "a faster
+#: Newton not adopted"), so the runs stay as they were until diagnosis does not hang on such a tie.
 MODIFIED: dict = {}
 
 #: (name, body, x, quantity "Acceleration" | "Velocity", component) of a sensor
