@@ -48,9 +48,9 @@ DRY = {"clamp_stiffness": 22445.56, "joint_stiffness": 8772824.7, "damping_ratio
        "dry_friction_stiffness": 10.3357}
 MODELS = {"linear": ([], LINEAR), "micro-slip": (["micro_slip"], MICRO_SLIP),
           "dry": (["micro_slip", {"name": "dry_friction", "attach": "beam1"}], DRY)}
-#: the settings compared (``simulation.MODIFIED``): Exudyn's defaults first (the model's
-#: and the baseline), then a Jacobian renewed after three iterations and a step given up
-#: after ten, and a tighter pair
+#: the settings compared (``simulation.MODIFIED``): Exudyn's defaults first (the baseline,
+#: the model's until model version 3), then a Jacobian renewed after three iterations and a
+#: step given up after ten (the model's since version 3), and a tighter pair
 SETTINGS = {"Exudyn's defaults": {},
             "renew after 3, fail after 10": {"maxModifiedNewtonIterations": 3,
                                              "maxIterations": 10},

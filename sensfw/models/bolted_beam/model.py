@@ -73,7 +73,8 @@ class BoltedBeam(Model):
     name = "bolted_beam"
     # 2: the reduced beams' exact Jacobian (simulation.REDUCED_JACOBIAN); where the micro-slip
     # sliders slip hard the runs move within their step's own discretisation error
-    version = "2"
+    # 3: modified Newton's limits (simulation.MODIFIED): the same, where sliders switch
+    version = "3"
     sensors = ("Acc1", "Acc2", "Acc3", "Acc4", "Laser")
     default_output = "Laser"
     units: ClassVar[dict[str, str]] = {"Acc1": "m/s^2", "Acc2": "m/s^2", "Acc3": "m/s^2",
@@ -216,8 +217,9 @@ class BoltedBeam(Model):
         silent_from = simulation.silence(force, excitation.fs)
         # Newton: modified (Jacobian kept while it converges: one iteration per step for the
         # linear model; Jenkins elements switch between stick and slip inside it, where a
-        # contraction above 0.5 renews it; simulation.MODIFIED); where effects added bodies,
-        # modified with a patient renewal (simulation.PATIENT); a failure is retried with
+        # contraction above 0.5 or a fourth iteration renews it, simulation.MODIFIED); where
+        # effects added bodies, modified with a patient renewal (simulation.PATIENT); a
+        # failure is retried with
         # full Newton.
         # A step that fails with full Newton too, at every step Exudyn may reduce it to
         # (simulation.solve), is a divergence at this step, which the runs retry at half the
