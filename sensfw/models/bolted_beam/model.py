@@ -219,8 +219,7 @@ class BoltedBeam(Model):
         # linear model; Jenkins elements switch between stick and slip inside it, where a
         # contraction above 0.5 or a fourth iteration renews it, simulation.MODIFIED); where
         # effects added bodies, modified with a patient renewal (simulation.PATIENT); a
-        # failure is retried with
-        # full Newton.
+        # failure is retried with full Newton.
         # A step that fails with full Newton too, at every step Exudyn may reduce it to
         # (simulation.solve), is a divergence at this step, which the runs retry at half the
         # step (sensfw.runs.spec.simulate_with_halving, [solver] halvings)
