@@ -316,8 +316,9 @@ def fallback_finalists(ranked: Sequence[Hypothesis], chi0: float, final: int
         return chi0 - h.screen.get("score", math.inf)
 
     lead = gain(ranked[0])
-    return ranked[:1] + [h for h in ranked[1:final]
-                         if lead > 0 and gain(h) >= LOOK_TIE * lead]
+    if lead <= 0:
+        return list(ranked[:1])
+    return ranked[:1] + [h for h in ranked[1:final] if gain(h) >= LOOK_TIE * lead]
 
 
 def _around(h0: Hypothesis, h: Hypothesis, half: float = 0.25):

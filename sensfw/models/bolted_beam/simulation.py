@@ -86,7 +86,8 @@ PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12
 #: half the step changes, so the runs move within the step's own discretisation error.
 #: Made the default once diagnosis calibrated near-tied first looks together
 #: (``sensfw.measure.diagnose.fallback_finalists``): with the limits alone, the README's
-#: UNESP-BERT loop lost its second-round verdict to such a tie (README, "a faster Newton").
+#: UNESP-BERT loop lost its second-round verdict to such a tie (README, "Newton's limits
+#: adopted").
 MODIFIED: dict = {"maxModifiedNewtonIterations": 3, "maxIterations": 10}
 
 #: (name, body, x, quantity "Acceleration" | "Velocity", component) of a sensor
@@ -467,8 +468,8 @@ def solve(built: BeamBuilt, fs: float, n_out: int, substeps: int, method: str,
     :func:`newton_tolerance`) crawl through the record at ~2 ms of signal per second
     without an error until the run's timeout (300 s). Here the smallest step is the run's
     step / 2**``STEP_REDUCTIONS`` (1/64: one halving below the deepest retry measured), so
-    such a step fails after seven attempts (the step and six halvings) of at most 25
-    Newton iterations each, in milliseconds:
+    such a step fails after seven attempts (the step and six halvings) of at most ten
+    Newton iterations each (``MODIFIED``; Exudyn's default: 25), in milliseconds:
     ``exudyn.SolverError`` naming the time and Newton's residual. The caller decides (the
     model retries with full Newton, then reports a divergence, which the runs' step
     halving, ``[solver] halvings``, retries at half the step). The steps taken are in
