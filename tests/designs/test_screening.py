@@ -5,6 +5,7 @@ import pyDOE3
 import pytest
 
 from sensfw.designs import make_design
+from sensfw.designs.base import DesignError
 from sensfw.designs.fractional_factorial import resolution
 from sensfw.designs.plackett_burman import partial_aliasing
 from sensfw.models.shaft_assembly import GROUPS, PARAMETERS
@@ -43,6 +44,31 @@ def test_oat_on_table_1_has_39_runs_and_selects_by_threshold_and_cap():
     row = table.loc["slide_friction_velocity:max"].to_dict()
     full = space.to_parameters(row)
     assert full["slide_v_friction"] == 10.0 and full["slide_v_stiction"] == 1.0
+
+
+def test_oat_with_groups_moves_each_group_together_and_ranks_groups():
+    space = unit_space(5)
+    groups = {"a": ["x1", "x2"], "b": ["x3"], "c": ["x4", "x5"]}
+    oat = make_design("oat", groups=groups)
+    table = oat.generate(space)
+    assert len(table) == 7 == oat.n_runs(space)  # 2 G + 1
+    assert table.loc["a:min", ["x1", "x2"]].tolist() == [-1.0, -1.0]
+    assert table.loc["a:min", ["x3", "x4", "x5"]].tolist() == [0.0, 0.0, 0.0]
+    assert table.loc["c:max", ["x4", "x5"]].tolist() == [1.0, 1.0]
+    # a linear response: the group's effect is its members' sum, which can cancel
+    def f(row):
+        return 0.4 * row["x1"] + 0.3 * row["x2"] + 0.1 * row["x3"] + 0.5 * row["x4"] \
+            - 0.5 * row["x5"]
+    y = np.array([f(r) for _, r in table.iterrows()])
+    res = oat.analyze(space, table, y)
+    assert res.ranking[:2] == ["a", "b"]
+    assert res.importance["a"] == 1.0
+    assert res.importance["b"] == pytest.approx(0.1 / 0.7)
+    assert res.importance["c"] == pytest.approx(0.0, abs=1e-12)  # x4 and x5 cancel
+    with pytest.raises(DesignError, match=r"without a group.*x5"):
+        make_design("oat", groups={"a": ["x1", "x2", "x3", "x4"]}).generate(space)
+    with pytest.raises(DesignError, match=r"unknown variables.*x9"):
+        make_design("oat", groups={"a": ["x1", "x2", "x3", "x4", "x5", "x9"]}).n_runs(space)
 
 
 def test_full_factorial_81_runs_with_table_2_mid_point():
