@@ -209,6 +209,25 @@ def test_run_study_writes_the_folder_load_result_reads(tmp_path):
     assert json.loads(json.dumps(results_json(again)))["stages"] == written["stages"]
 
 
+def test_a_group_screen_passes_the_members_of_its_selected_groups_on(tmp_path):
+    """A screen by groups (``oat`` with ``groups``) selects groups; the next stage's
+    ``selected:screen`` takes their members. y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3: x1 and
+    x2 moved together change y by 2.5 (to 3.5 at -1), x3 alone not at all."""
+    from sensfw.pipeline import plan, run_study
+    from sensfw.study import Study
+
+    spec = json.loads(json.dumps(LIBRARY_STUDY))
+    spec["stages"][0]["design_options"] = {"groups": {"x12": ["x1", "x2"], "x3": ["x3"]}}
+    spec["stages"][0]["select"] = {"threshold": 0.05, "max_variables": 1}
+    study = Study.from_dict(spec)
+    assert [p["n_runs"] for p in plan(study)] == [5, 9]  # 2 G + 1; 3^2 on the largest group
+    result = run_study(study, out=tmp_path, report=False)
+    screen, doe = result.stages
+    assert screen.selected == ["x12"]
+    assert len(screen.table) == 5 and len(doe.table) == 9
+    assert doe.space.names == ["x1", "x2"]
+
+
 def test_a_rebuild_takes_the_stored_validation_of_the_same_fit(tmp_path, monkeypatch):
     """`sensfw report` does not cross-validate again (issue 26, item 6): each surrogate's
     validation comes from results.json when its fitted values are the refitted surrogate's
