@@ -187,10 +187,10 @@ def group_oat(bench: Bench, components: dict[str, list[str]], oat: dict) -> dict
         if groups[g] < bar:
             break
         sub = bench.study.space(bench.screen_stage, components[g])
-        k, _ = bench.screen(sub, make_design("oat"), f"screen: OAT within {g}")
+        k, res = bench.screen(sub, make_design("oat"), f"screen: OAT within {g}")
         keys |= set(k)
         opened.append(g)
-        found.update({v: float(s_oat[v]) for v in components[g]})
+        found.update(res.table["sensitivity"].astype(float).to_dict())
     best = max(found.values())
     selected = [v for v in sorted(found, key=found.get, reverse=True)
                 if found[v] / best > SCREEN_THRESHOLD][:TOP]

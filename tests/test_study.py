@@ -239,6 +239,11 @@ def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space()
     data["stages"][0]["design"] = "box_behnken"
     data["stages"][0]["variables"] = ["slide_stiffness", "slide_damping"]
     assert "needs at least 3 variables, got 2" in problems(data)["stages[0].design"]
+    data = copy.deepcopy(QUICK)  # groups that do not cover the stage's variables
+    data["stages"][0]["variables"] = ["slide_stiffness", "slide_damping"]
+    data["stages"][0]["design_options"] = {"groups": {"a": ["slide_stiffness", "nope"]}}
+    assert problems(data)["stages[0].design_options.groups"] == (
+        "design 'oat': unknown variables in groups: ['nope']")
 
 
 def test_cli_validate_reports_bad_options(tmp_path):

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from ..errors import SensfwError, UnknownPluginError
+from ..errors import OptionError, SensfwError, UnknownPluginError
 from ..options import Problem, build
 from ..params import DesignSpace, ParameterSet
 from .schema import ParameterOverride, StageSpec
@@ -97,6 +97,9 @@ def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace]
         return []  # unknown variables are reported at stages[i].variables
     try:
         design.n_runs(space(names))
+    except OptionError as err:  # an option that does not fit the stage's variables
+        return [(f"{where}.design_options.{opt}" if opt else f"{where}.design", msg)
+                for opt, msg in err.problems]
     except SensfwError as err:
         return [(f"{where}.design", str(err))]
     return []
