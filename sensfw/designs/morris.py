@@ -56,7 +56,8 @@ class Morris(Design):
             member = {v: g for g, vs in groups.items() for v in vs}
             missing = [v for v in space.names if v not in member]
             if missing:
-                raise DesignError(f"design 'morris': variables without a group: {missing}")
+                raise DesignError(f"design 'morris': variables without a group: {missing}",
+                                  option="groups")
             prob["groups"] = [member[v] for v in space.names]
         return prob
 

@@ -81,11 +81,12 @@ class OAT(Design):
         y = responses(table, y, self.name)
         s = pd.Series(y, index=table.index)
         recs, notes = [], []
+        factor = "group" if self.options["groups"] else "variable"
         for name in self._groups(space):
             lo, hi = s.get(f"{name}:min", np.nan), s.get(f"{name}:max", np.nan)
             ends = [abs(e) for e in (lo, hi) if np.isfinite(e)]
             if not ends:
-                raise AnalysisError(f"oat: variable {name!r} has neither its min nor its max "
+                raise AnalysisError(f"oat: {factor} {name!r} has neither its min nor its max "
                                     "run; its sensitivity cannot be computed")
             if len(ends) == 1:
                 notes.append(f"{name}: only its {'max' if np.isfinite(hi) else 'min'} run "
