@@ -372,8 +372,10 @@ def write_study_report(result, path: str | Path) -> Path:
         page.note(f"{c.failed} run(s) failed; the analyses below use the others (see each "
                   "stage).")
     for stage in result.stages:
-        page.h2(f"Stage {stage.name}: {stage.spec.design} on {len(stage.space)} variables, "
-                f"{len(stage.table)} runs")
+        groups = stage.spec.design_options.get("groups") or {}
+        page.h2(f"Stage {stage.name}: {stage.spec.design} on {len(stage.space)} variables"
+                + (f" in {len(groups)} groups" if groups else "")
+                + f", {len(stage.table)} runs")
         for n in stage.notes:
             page.note(n)
         signals = _time_signals(result, stage)
@@ -384,8 +386,9 @@ def write_study_report(result, path: str | Path) -> Path:
         if stage.selected is not None:
             page.figure(sensitivity_bars(stage, stage.spec.select.threshold),
                         "Fig. 8 analogue: normalised sensitivity from the FRF scalar.")
-            page.p("Selected for the next stage: " + (", ".join(stage.selected) or "none"),
-                   "ok")
+            page.p("Selected for the next stage: " + (", ".join(
+                f"{g} ({', '.join(groups[g])})" if g in groups else g
+                for g in stage.selected) or "none"), "ok")
         elif stage.screening is not None:
             page.figure(sensitivity_bars(stage, None), f"{stage.spec.design}: importance")
         if stage.screening is not None:
