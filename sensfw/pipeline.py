@@ -40,16 +40,8 @@ def stage_variables(study: Study, stage: StageSpec, done: dict[str, StageResult]
     selected = done[ref].selected or []
     if not selected:
         raise AnalysisError(f"stage {stage.name!r}: stage {ref!r} selected no variables")
-    groups = screen_groups(study, ref)
+    groups = next(s for s in study.stages if s.name == ref).groups
     return [v for g in selected for v in groups.get(g, [g])]
-
-
-def screen_groups(study: Study, name: str) -> dict[str, list[str]]:
-    """The groups stage ``name``'s design screens (``design_options.groups``, e.g. ``oat``
-    or ``morris`` by groups of variables; empty without): a later stage's
-    ``selected:NAME`` takes the members of the selected groups."""
-    stage = next(s for s in study.stages if s.name == name)
-    return dict(stage.design_options.get("groups") or {})
 
 
 def _select(stage: StageSpec, screening, scores: pd.DataFrame) -> list[str]:
@@ -306,7 +298,7 @@ def plan(study: Study) -> list[dict]:
         else:
             n = 0
         if stage.select is not None:
-            groups = sorted(map(len, screen_groups(study, stage.name).values()), reverse=True)
+            groups = sorted(map(len, stage.groups.values()), reverse=True)
             most = stage.select.max_variables or (len(groups) if groups else k)
             n_selected[stage.name] = sum(groups[:most]) if groups else most
         out.append({"stage": stage.name, "design": stage.design, "variables": note,

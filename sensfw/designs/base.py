@@ -74,6 +74,21 @@ class Design(ABC):
         """Importance of every variable from the responses ``y`` (NaN = failed run)."""
 
 
+def check_groups(design: str, groups: dict[str, list[str]], names: list[str]
+                 ) -> dict[str, str]:
+    """Variable -> its group, every one of ``names`` in exactly one of ``groups`` (a
+    design's ``groups`` option); otherwise a :class:`DesignError` at ``groups``."""
+    member = [v for vs in groups.values() for v in vs]
+    problems = (("unknown variables", sorted(set(member) - set(names))),
+                ("variables without a group", [v for v in names if v not in member]),
+                ("variables in two groups", sorted({v for v in member
+                                                    if member.count(v) > 1})))
+    for what, bad in problems:
+        if bad:
+            raise DesignError(f"design {design!r}: {what} in groups: {bad}", option="groups")
+    return {v: g for g, vs in groups.items() for v in vs}
+
+
 def responses(table: pd.DataFrame, y, design: str) -> np.ndarray:
     y = np.asarray(y, dtype=float).ravel()
     if len(y) != len(table):

@@ -13,7 +13,7 @@ from ..options import Bool, Float, Int, PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import to_table
-from .base import Design, DesignError, ScreeningResult, responses
+from .base import Design, DesignError, ScreeningResult, check_groups, responses
 
 
 @designs.register("morris")
@@ -53,11 +53,7 @@ class Morris(Design):
                 len(space)}
         groups = self.options["groups"]
         if groups:
-            member = {v: g for g, vs in groups.items() for v in vs}
-            missing = [v for v in space.names if v not in member]
-            if missing:
-                raise DesignError(f"design 'morris': variables without a group: {missing}",
-                                  option="groups")
+            member = check_groups(self.name, groups, space.names)
             prob["groups"] = [member[v] for v in space.names]
         return prob
 

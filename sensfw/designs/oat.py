@@ -12,7 +12,7 @@ from ..errors import AnalysisError
 from ..options import PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
-from .base import Design, DesignError, ScreeningResult, responses
+from .base import Design, ScreeningResult, check_groups, responses
 
 
 @designs.register("oat")
@@ -50,16 +50,7 @@ class OAT(Design):
         if not groups:
             return {v.name: [v] for v in space.variables}
         by_name = {v.name: v for v in space.variables}
-        member = [v for vs in groups.values() for v in vs]
-        unknown = sorted(set(member) - set(by_name))
-        missing = [v for v in space.names if v not in member]
-        twice = sorted({v for v in member if member.count(v) > 1})
-        for what, names in (("unknown variables", unknown), ("variables without a group",
-                                                              missing),
-                            ("variables in two groups", twice)):
-            if names:
-                raise DesignError(f"design 'oat': {what} in groups: {names}",
-                                  option="groups")
+        check_groups(self.name, groups, space.names)
         return {g: [by_name[v] for v in vs] for g, vs in groups.items()}
 
     def n_runs(self, space: DesignSpace) -> int:

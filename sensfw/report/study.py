@@ -372,7 +372,7 @@ def write_study_report(result, path: str | Path) -> Path:
         page.note(f"{c.failed} run(s) failed; the analyses below use the others (see each "
                   "stage).")
     for stage in result.stages:
-        groups = stage.spec.design_options.get("groups") or {}
+        groups = stage.spec.groups
         page.h2(f"Stage {stage.name}: {stage.spec.design} on {len(stage.space)} variables"
                 + (f" in {len(groups)} groups" if groups else "")
                 + f", {len(stage.table)} runs")

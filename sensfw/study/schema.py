@@ -131,6 +131,12 @@ class StageSpec(_Strict):
     surrogates: list[SurrogateSpec] = Field(default_factory=list)
     confirmation_runs: int = Field(default=0, ge=0)
 
+    @property
+    def groups(self) -> dict[str, list[str]]:
+        """The groups this stage's design screens (``design_options.groups`` of ``oat`` or
+        ``morris``; empty without): a later stage's ``selected:NAME`` takes their members."""
+        return dict(self.design_options.get("groups") or {})
+
     @field_validator("surrogates", mode="before")
     @classmethod
     def _surrogate_names(cls, v):
