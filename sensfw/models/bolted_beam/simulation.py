@@ -86,7 +86,7 @@ PATIENT = {"modifiedNewtonContractivity": 0.9, "maxModifiedNewtonIterations": 12
 #: half the step changes, so the runs move within the step's own discretisation error.
 #: Made the default once diagnosis calibrated near-tied first looks together
 #: (``sensfw.measure.diagnose.fallback_finalists``): with the limits alone, the README's
-#: UNESP-BERT loop lost its second-round verdict to such a tie (README, "Newton's limits
+#: UNESP-BERT loop lost its second-round verdict to such a tie (`bench/BERT.md`, "Newton's limits
 #: adopted").
 MODIFIED: dict = {"maxModifiedNewtonIterations": 3, "maxIterations": 10}
 
