@@ -20,12 +20,15 @@ class OAT(Design):
     """Nominal run plus the min and the max of each design variable, all others nominal
     (grouped parameters move together): ``2k + 1`` runs, the nominal first.
 
-    Analysis: ``y`` is each run's relative change of the FRF scalar against the nominal
-    reference (Eq. 11; the nominal row's own ``y`` is ignored). A variable's sensitivity
-    combines ``|s_min|`` and ``|s_max|`` (option ``combine``: ``"max"`` — a variable matters if
-    either end matters, the default; ``"mean"``; ``"sum"``), then is normalised (``normalise``:
-    ``"max"`` — the largest becomes 1, the bars of Fig. 8, default; ``"sum"`` — shares of the
-    total). Selection keeps variables above a threshold (paper: 10 %).
+    Analysis: a variable's changes ``s_min``, ``s_max`` are its end runs' ``y`` less the
+    nominal run's (for the paper's FRF scalar, Eq. 11, the relative change against the
+    nominal reference, the nominal's own ``y`` is 0 and ``s`` is ``y``; for any other scorer,
+    a value, an RMS, a THD, this is what makes a variable without effect score 0). Its
+    sensitivity combines ``|s_min|`` and ``|s_max|`` (option ``combine``: ``"max"`` — a
+    variable matters if either end matters, the default; ``"mean"``; ``"sum"``), then is
+    normalised (``normalise``: ``"max"`` — the largest becomes 1, the bars of Fig. 8,
+    default; ``"sum"`` — shares of the total). Selection keeps variables above a threshold
+    (paper: 10 %).
 
     ``groups`` (group name -> variables, every variable in one) moves each group's members
     to their min together and to their max together: ``2 G + 1`` runs, the sensitivities
@@ -71,6 +74,11 @@ class OAT(Design):
     def analyze(self, space: DesignSpace, table: pd.DataFrame, y) -> ScreeningResult:
         y = responses(table, y, self.name)
         s = pd.Series(y, index=table.index)
+        base = s.get("nominal", np.nan)
+        if not np.isfinite(base):
+            raise AnalysisError("oat: the nominal run has no score (failed or missing); the "
+                                "ends' changes are measured from it")
+        s = s - base
         recs, notes = [], []
         factor = "group" if self.options["groups"] else "variable"
         for name in self._groups(space):

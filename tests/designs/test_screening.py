@@ -8,6 +8,7 @@ from sensfw.designs import make_design
 from sensfw.designs.base import DesignError
 from sensfw.designs.fractional_factorial import resolution
 from sensfw.designs.plackett_burman import partial_aliasing
+from sensfw.errors import AnalysisError
 from sensfw.models.shaft_assembly import GROUPS, PARAMETERS
 from sensfw.params import DesignSpace, Parameter, ParameterSet
 from sensfw.testing import ishigami, ishigami_indices, quadratic
@@ -44,6 +45,24 @@ def test_oat_on_table_1_has_39_runs_and_selects_by_threshold_and_cap():
     row = table.loc["slide_friction_velocity:max"].to_dict()
     full = space.to_parameters(row)
     assert full["slide_v_friction"] == 10.0 and full["slide_v_stiction"] == 1.0
+
+
+def test_oat_measures_each_end_from_the_nominal_run_whatever_the_scorer():
+    # a scorer that is not already relative to the nominal (a value, an RMS): y = 100 +
+    # 3 x1 + 0.1 x2 on coded variables, x3 without effect. The changes from the nominal
+    # are exact: +-3, +-0.1 and 0, so x3 scores 0 and x2 0.1 / 3 of x1
+    space = unit_space(3)
+    oat = make_design("oat")
+    table = oat.generate(space)
+    y = (100.0 + 3.0 * table["x1"] + 0.1 * table["x2"]).to_numpy(copy=True)
+    res = oat.analyze(space, table, y)
+    assert res.table.loc["x1", ["s_min", "s_max"]].tolist() == pytest.approx([-3.0, 3.0])
+    assert res.importance["x2"] == pytest.approx(0.1 / 3.0)
+    assert res.importance["x3"] == pytest.approx(0.0, abs=1e-12)
+    assert res.select(threshold=0.10) == ["x1"]
+    y[list(table.index).index("nominal")] = np.nan  # the nominal run failed
+    with pytest.raises(AnalysisError, match="nominal run"):
+        oat.analyze(space, table, y)
 
 
 def test_oat_with_groups_moves_each_group_together_and_ranks_groups():
