@@ -207,6 +207,10 @@ class DesignSpace:
         params = parameters.with_bounds(bounds or {})
         groups = {k: tuple(v) for k, v in (groups or {}).items()}
         grouped = {m for ms in groups.values() for m in ms}
+        clash = [g for g, ms in groups.items() if g in params and g not in ms]
+        if clash:
+            raise ParameterError(f"group name(s) {clash} are parameters outside their groups: "
+                                 "each would hide that parameter; name the groups otherwise")
         variables: dict[str, DesignVariable] = {}
         for name in params:
             if name in grouped:

@@ -246,6 +246,24 @@ def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space()
         "design 'oat': unknown variables in groups: ['nope']")
 
 
+def test_the_groups_table_is_checked_at_its_dotted_path():
+    # each a StudyError naming groups.NAME (before, an unknown member or a doubly grouped
+    # parameter escaped as a bare ParameterError, and a group named like a parameter outside
+    # it silently removed that parameter from the design)
+    cases = {
+        "g": (["slide_damping", "nope"], "unknown parameter 'nope'"),
+        "h": (["slide_damping", "slide_damping"], "parameter 'slide_damping' is listed twice"),
+        "slide_stiffness": (["slide_damping", "spring_damping"],
+                            "the group's name is the parameter 'slide_stiffness'"),
+    }
+    for name, (members, message) in cases.items():
+        data = copy.deepcopy(QUICK)
+        data["groups"] = {name: members}
+        got = problems(data)
+        assert list(got) == [f"groups.{name}"], got
+        assert message in got[f"groups.{name}"]
+
+
 def test_cli_validate_reports_bad_options(tmp_path):
     bad = tmp_path / "bad.toml"
     text = (ROOT / "studies" / "quick.toml").read_text()

@@ -57,7 +57,10 @@ class Study:
         self.excitation = self._resolve_excitation(problems)
         self.parameters = self._resolve_parameters(problems)
         self.solver = self._resolve_solver(problems)
+        before = len(problems)
         self.groups = self._resolve_groups(problems)
+        if len(problems) > before:  # every design variable is made of the groups
+            raise StudyError(problems, source)
         found, self.stage_bounds = check_stages(
             spec.stages, parameters=self.parameters, groups=self.groups,
             excitation=self.excitation,
@@ -229,9 +232,14 @@ class Study:
                 if self.parameters is not None and m not in self.parameters:
                     problems.append((f"groups.{g}", f"unknown parameter {m!r}"))
                 if m in seen:
-                    problems.append((f"groups.{g}", f"parameter {m!r} is already in group "
-                                                    f"{seen[m]!r}"))
+                    problems.append((f"groups.{g}", f"parameter {m!r} is listed twice" if
+                                     seen[m] == g else f"parameter {m!r} is already in "
+                                     f"group {seen[m]!r}"))
                 seen[m] = g
+            if self.parameters is not None and g in self.parameters and g not in members:
+                problems.append((f"groups.{g}", f"the group's name is the parameter {g!r}, "
+                                                "which is not one of its members; name the "
+                                                "group otherwise"))
         return groups
 
     def variable_names(self) -> list[str]:
