@@ -43,6 +43,10 @@ from .full_factorial import FullFactorial
 from .oat import OAT
 
 CRITERIA = ("D", "I")
+#: passes of the exchange over a start's rows at most (each pass that swaps a row improves
+#: the criterion; a design that cannot estimate every term gains only round-off and could
+#: cycle)
+MAX_PASSES = 100
 
 
 def eq18_columns(Z: np.ndarray) -> np.ndarray:
@@ -112,9 +116,9 @@ def exchange(candidates: np.ndarray, n: int, fixed: np.ndarray | None = None,
     best_idx, best = None, -np.inf
     for _ in range(starts):
         idx = list(rng.choice(N, n, replace=False))
-        improved = True
-        while improved:
-            improved = False
+        improved, passes = True, 0
+        while improved and passes < MAX_PASSES:
+            improved, passes = False, passes + 1
             for i in range(n):
                 info = base + candidates[idx].T @ candidates[idx] + ridge
                 gains = _swap_gains(np.linalg.inv(info), candidates, candidates[idx[i]],
@@ -157,8 +161,23 @@ class OptimalDesign(FullFactorial):
         return pd.DataFrame(columns=space.names, dtype=float)
 
     def _runs(self, space: DesignSpace) -> int:
+        """The runs to choose: ``runs``, or Eq. 18's coefficients + 5 but at most the grid's
+        points; a ``runs`` that cannot estimate every Eq. 18 term with the runs already
+        made, or that the grid does not hold, is a :class:`DesignError` (``option="runs"``)."""
         k = len(space)
-        return self.options["runs"] or (k + 1) * (k + 2) // 2 + 5
+        terms = (k + 1) * (k + 2) // 2
+        n_fixed = len(self._fixed(space))
+        grid = super().n_runs(space)  # an upper bound: the OAT runs on the grid are not free
+        runs = self.options["runs"] or min(terms + 5, grid)
+        if runs + n_fixed < terms:
+            raise DesignError(f"design {self.name!r}: {runs} runs"
+                              + (f" and {n_fixed} already made" if n_fixed else "")
+                              + f" cannot estimate Eq. 18's {terms} terms of {k} variables",
+                              option="runs")
+        if runs > grid:
+            raise DesignError(f"design {self.name!r}: {runs} runs asked, the grid has {grid} "
+                              "points", option="runs")
+        return runs
 
     def n_runs(self, space: DesignSpace) -> int:
         return self._runs(space) + len(self._fixed(space))

@@ -104,9 +104,16 @@ def test_optimal_design_refuses_bad_options(options, option):
 
 
 def test_too_few_runs_for_eq18_is_an_error_naming_runs():
-    with pytest.raises(DesignError, match=r"estimates every Eq\. 18 term") as err:
-        make_design("optimal", runs=12).generate(space4())  # 15 coefficients
+    # refused when counted (a study's validation), before an exchange that cannot end well
+    # (it searched for ever where the runs could not estimate every term)
+    with pytest.raises(DesignError, match=r"12 runs cannot estimate Eq\. 18's 15 terms") as err:
+        make_design("optimal", runs=12).n_runs(space4())  # 15 coefficients
     assert err.value.option == "runs"
+    with pytest.raises(DesignError, match=r"100 runs asked, the grid has 81 points"):
+        make_design("optimal", runs=100).n_runs(space4())
+    # enough runs, a grid that cannot hold the squares (two levels): the exchange says so
+    with pytest.raises(DesignError, match=r"estimates every Eq\. 18 term"):
+        make_design("optimal", runs=15, levels=2).generate(space4())
     # with the OAT's 9 runs, 6 more estimate the 15 coefficients
     assert len(make_design("optimal", runs=6, augment="oat").generate(space4())) == 15
 
