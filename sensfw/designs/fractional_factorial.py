@@ -25,17 +25,51 @@ from .base import Design, DesignError, ScreeningResult, responses
 LETTERS = string.ascii_lowercase
 
 
+def _nullspace_gf2(D: np.ndarray) -> list[int]:
+    """A basis (bit masks over the columns) of the words ``w`` with ``D w = 0`` over GF(2)."""
+    rows = [int("".join("1" if v else "0" for v in r[::-1]), 2) for r in D if r.any()]
+    k = D.shape[1]
+    pivots: dict[int, int] = {}  # pivot column -> reduced row
+    for r in rows:
+        for c, pr in pivots.items():
+            if r >> c & 1:
+                r ^= pr
+        if r:
+            c = r.bit_length() - 1
+            for c2 in list(pivots):
+                if pivots[c2] >> c & 1:
+                    pivots[c2] ^= r
+            pivots[c] = r
+    free = [c for c in range(k) if c not in pivots]
+    basis = []
+    for f in free:
+        w = 1 << f
+        for c, pr in pivots.items():
+            if pr >> f & 1:
+                w |= 1 << c
+        basis.append(w)
+    return basis
+
+
+def _span(basis: list[int]) -> np.ndarray:
+    """Every non-zero element of the GF(2) span of ``basis`` (bit masks)."""
+    span = np.zeros(1, dtype=object)
+    for w in basis:
+        span = np.concatenate([span, span ^ w])
+    return span[1:]
+
+
 def defining_words(X: np.ndarray, max_length: int = 6) -> list[tuple[int, ...]]:
     """Words (column index sets, length <= ``max_length``) whose product column is constant:
-    the defining relation of a regular two-level design."""
-    k = X.shape[1]
-    words = []
-    for r in range(1, min(max_length, k) + 1):
-        for w in itertools.combinations(range(k), r):
-            p = np.prod(X[:, w], axis=1)
-            if np.all(p == p[0]):
-                words.append(w)
-    return words
+    the defining relation of a regular two-level design. Computed over GF(2) (a word is
+    constant on the runs where it vanishes on every difference of two runs), so its cost
+    is ``2^p`` for the ``p`` generated columns, not one product per column subset."""
+    X = np.asarray(X)
+    bits = X < 0
+    basis = _nullspace_gf2(bits[1:] ^ bits[0]) if len(X) > 1 else \
+        [1 << c for c in range(X.shape[1])]
+    words = [tuple(c for c in range(X.shape[1]) if int(w) >> c & 1) for w in _span(basis)]
+    return sorted((w for w in words if len(w) <= max_length), key=lambda w: (len(w), w))
 
 
 def resolution(X: np.ndarray, max_length: int = 8) -> int:
@@ -96,12 +130,35 @@ def search_generators(k: int, res: int) -> str:
         pool = words(base, range(res - 1, b + 1))
         if len(pool) < p:
             continue
-        for combo in itertools.islice(itertools.combinations(pool, p), 5000):
-            gen = " ".join([*base, *combo])
+        chosen = _greedy_words(base, pool, p, res)
+        if chosen is not None:
+            gen = " ".join([*base, *chosen])
             if resolution(fracfact(gen), res) >= res:
                 return gen
     raise DesignError(f"no 2-level design of resolution {res} found for {k} factors; "
                       "ask for a lower resolution or use definitive_screening")
+
+
+def _greedy_words(base: str, pool: list[str], p: int, res: int) -> list[str] | None:
+    """``p`` generator words from ``pool`` whose defining relation has no word shorter than
+    ``res``: greedily, each word added where it keeps that (the relation's words checked as
+    bit masks, ``2^p`` at most), starting from each word of ``pool`` in turn (the first
+    word decides much: for 8 factors at resolution V, ``abcdef`` first leaves no second
+    generator on 6 base factors, ``abcde`` first finds ``abcf``), or None."""
+    b = len(base)
+    masks = [sum(1 << base.index(ch) for ch in word) for word in pool]
+    for start in range(len(pool)):
+        group: list[int] = []  # the defining relation so far, every non-zero word
+        chosen: list[str] = []
+        for i in [*range(start, len(pool)), *range(start)]:
+            mask = masks[i] | 1 << (b + len(chosen))
+            new = [mask, *(mask ^ g for g in group)]
+            if min(bin(w).count("1") for w in new) >= res:
+                group += new
+                chosen.append(pool[i])
+                if len(chosen) == p:
+                    return chosen
+    return None
 
 
 @designs.register("fractional_factorial")
@@ -119,7 +176,9 @@ class FractionalFactorial(Design):
     class Options(PluginOptions):
         generators: Str | None = Field(
             None, description="a string of generators like 'a b c ab' or none")
-        resolution: Literal[3, 4, 5, 6] = Field(4, description="3, 4, 5 or 6")
+        resolution: Literal[3, 4, 5, 6] | None = Field(
+            None, description="3, 4, 5 or 6 (default 4; with generators, the least they "
+                              "must reach)")
         center: Annotated[Int, Field(ge=0)] = Field(0, description="an integer >= 0")
 
     def matrix(self, k: int) -> tuple[np.ndarray, str, int]:
@@ -136,12 +195,23 @@ class FractionalFactorial(Design):
         o = self.options
         if o["generators"]:
             gen = o["generators"]
-            X = fracfact(gen)
+            try:
+                X = fracfact(gen)
+            except ValueError as exc:  # pyDOE3: "Generators are not valid."
+                raise DesignError(f"design 'fractional_factorial': generators {gen!r}: {exc} "
+                                  "(words of letters a-z separated by spaces, e.g. 'a b c "
+                                  "ab')", option="generators") from None
             if X.shape[1] != k:
                 raise DesignError(f"design 'fractional_factorial': generators give "
-                                  f"{X.shape[1]} columns for {k} variables")
-            return X, gen, resolution(X)
-        want = o["resolution"]
+                                  f"{X.shape[1]} columns for {k} variables",
+                                  option="generators")
+            got = resolution(X)
+            if o["resolution"] is not None and got < o["resolution"]:
+                raise DesignError(f"design 'fractional_factorial': generators {gen!r} give "
+                                  f"resolution {got}, below the {o['resolution']} asked",
+                                  option="generators")
+            return X, gen, got
+        want = o["resolution"] or 4
         try:
             X = fracfact_by_res(k, want)
             got = resolution(X, want)

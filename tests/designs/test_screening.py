@@ -168,6 +168,29 @@ def test_resolution_is_checked_not_trusted():
     assert "resolution 5" in res.notes[0]
 
 
+def test_resolution_v_and_vi_designs_are_found_with_the_textbook_run_counts():
+    # the smallest regular 2-level designs (Montgomery, Design and Analysis of Experiments,
+    # Table 8.14): resolution V for 10 and 11 factors in 128 runs, 12 in 256; resolution VI
+    # for 12 in 256. The search took minutes from 10 factors on (a product column per
+    # column subset for every candidate); the defining relation is now read over GF(2)
+    for k, res, runs in ((10, 5, 128), (11, 5, 128), (12, 5, 256), (12, 6, 256)):
+        X, _, got = make_design("fractional_factorial", resolution=res).matrix(k)
+        assert (len(X), got) == (runs, res), (k, res)
+        assert resolution(X) == res  # no shorter word than asked: checked from the matrix
+    assert resolution(pyDOE3.fracfact("a b c ab ac bc abc")) == 3  # 2^(7-4)_III
+    assert resolution(pyDOE3.fracfact("a b c d abcd")) == 5  # 2^(5-1)_V
+    assert resolution(pyDOE3.fullfact([2] * 4) * 2 - 1, max_length=4) == 5  # no word
+
+
+def test_fractional_factorial_generators_are_checked():
+    with pytest.raises(DesignError, match="generators 'a b zz'") as err:
+        make_design("fractional_factorial", generators="a b zz").matrix(3)
+    assert err.value.option == "generators"
+    with pytest.raises(DesignError, match="give resolution 3, below the 4 asked"):
+        make_design("fractional_factorial", generators="a b ab", resolution=4).matrix(3)
+    assert make_design("fractional_factorial", generators="a b ab").matrix(3)[2] == 3
+
+
 def test_morris_ranks_x1_x2_above_x3_on_ishigami():
     space = ishigami_space()
     morris = make_design("morris", trajectories=20, levels=4)
