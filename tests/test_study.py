@@ -246,6 +246,26 @@ def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space()
         "design 'oat': unknown variables in groups: ['nope']")
 
 
+def test_seeds_amplitudes_timeouts_and_variable_lists_that_cannot_work_are_refused():
+    # each failed only later (numpy refuses a negative seed, SALib an empty design, a zero
+    # drive gives no FRF) or was silently taken ("7", true and 1.0 as seeds, a timeout of 0)
+    for section, field, value, message in (
+            ("study", "seed", -1, "greater than or equal to 0"),
+            ("study", "seed", "7", "valid integer"),
+            ("study", "seed", True, "valid integer"),
+            ("study", "seed", 1.0, "valid integer"),
+            ("excitation", "amplitude", "0 N", "must be positive"),
+            ("excitation", "amplitude", "-0.1 N", "must be positive"),
+            ("solver", "timeout", "0 s", "must be positive")):
+        data = copy.deepcopy(QUICK)
+        data.setdefault(section, {})[field] = value
+        got = problems(data)
+        assert message in got[f"{section}.{field}"], (field, value, got)
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["variables"] = []
+    assert "at least one variable" in problems(data)["stages[0].variables"]
+
+
 def test_the_groups_table_is_checked_at_its_dotted_path():
     # each a StudyError naming groups.NAME (before, an unknown member or a doubly grouped
     # parameter escaped as a bare ParameterError, and a group named like a parameter outside

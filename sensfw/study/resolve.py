@@ -152,6 +152,9 @@ class Study:
             except ValueError as err:
                 problems.append(("excitation.amplitude", f"{err} (a force in N or a "
                                                          "voltage in V)"))
+        if "amplitude" in vals and not vals["amplitude"] > 0:
+            problems.append(("excitation.amplitude", f"{e.amplitude} must be positive"))
+            del vals["amplitude"]
         if vals.get("signal_unit") == "V" and e.gain is None:
             problems.append(("excitation.gain", "a voltage excitation needs the shaker's "
                                                 "gain: gain = { nominal, min, max } in N/V"))
@@ -197,6 +200,9 @@ class Study:
             timeout = None if s.timeout is None else to_unit(s.timeout, "s")
         except ValueError as err:
             problems.append(("solver.timeout", str(err)))
+        if timeout is not None and not timeout > 0:
+            problems.append(("solver.timeout", f"{s.timeout} must be positive (leave it out "
+                                               "for no timeout)"))
         if step is None:
             return None
         if not 0 < step < 1e-2:

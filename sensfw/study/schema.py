@@ -4,9 +4,9 @@ model and the registries."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, field_validator
 
 from ..models.stepsize import DEFAULT_TOLERANCE
 
@@ -17,10 +17,15 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+#: a seed: a non-negative integer as written (numpy's generators refuse negative seeds, and
+#: "7", true or 1.0 are typos for a study file, not seeds)
+Seed = Annotated[StrictInt, Field(ge=0)]
+
+
 class StudyInfo(_Strict):
     name: str
     description: str = ""
-    seed: int = 0
+    seed: Seed = 0
 
 
 class ModelSection(_Strict):
@@ -50,7 +55,7 @@ class ExcitationSection(_Strict):
     amplitude: Quantity = "0.1 N"
     tail: Quantity = "0 s"
     steps: int = Field(default=20, ge=1)  # stepped_sine
-    seed: int = 0  # random
+    seed: Seed = 0  # random
     drive: Literal["auto", "measured", "ideal"] = "auto"
     gain: GainSection | None = None
 
@@ -148,6 +153,8 @@ class StageSpec(_Strict):
     def _variables(cls, v):
         if isinstance(v, str) and v != "all" and not v.startswith("selected:"):
             raise ValueError("must be 'all', 'selected:<stage name>' or a list of variables")
+        if isinstance(v, list) and not v:
+            raise ValueError("an empty list: a stage needs at least one variable")
         return v
 
 
