@@ -266,6 +266,18 @@ def test_seeds_amplitudes_timeouts_and_variable_lists_that_cannot_work_are_refus
     assert "at least one variable" in problems(data)["stages[0].variables"]
 
 
+def test_a_stages_bounds_are_held_to_the_models_range_like_the_parameters():
+    # Table 1's slide damping spans 1-468 N s/mm, the range the shaft model accepts: a stage
+    # that widened it ran every run into the model's refusal and failed after them
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["bounds"] = {"slide_damping": {"max": "1000 N*s/mm"}}
+    assert "outside the range the model shaft_assembly accepts, [1, 468]" in problems(
+        data)["stages[0].bounds.slide_damping.max"]
+    data = copy.deepcopy(QUICK)
+    data["parameters"] = {"slide_damping": {"min": float("nan")}}
+    assert problems(data) == {"parameters.slide_damping.min": "nan is not a finite number"}
+
+
 def test_the_groups_table_is_checked_at_its_dotted_path():
     # each a StudyError naming groups.NAME (before, an unknown member or a doubly grouped
     # parameter escaped as a bare ParameterError, and a group named like a parameter outside

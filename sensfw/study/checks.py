@@ -12,6 +12,7 @@ run.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -27,10 +28,12 @@ Bounds = dict[str, dict[str, float]]
 
 
 def bound_overrides(overrides: Mapping[str, ParameterOverride], declared: ParameterSet,
-                    prefix: str) -> tuple[Bounds, Problems]:
+                    prefix: str, accepted: ParameterSet | None = None,
+                    model: str = "") -> tuple[Bounds, Problems]:
     """The overrides of ``declared`` parameters in their units, and every problem at
     ``prefix.<parameter>[.field]`` (an unknown parameter, a value that does not convert, a
-    min above the max, a nominal outside the bounds)."""
+    min above the max, a nominal outside the bounds, a value outside the range the
+    ``model`` accepts, its ``accepted`` parameters' bounds)."""
     problems: Problems = []
     changes: Bounds = {}
     for name, ov in overrides.items():
@@ -48,6 +51,11 @@ def bound_overrides(overrides: Mapping[str, ParameterOverride], declared: Parame
                 vals[field_name] = to_unit(raw, p.unit)
             except ValueError as err:
                 problems.append((f"{prefix}.{name}.{field_name}", str(err)))
+                continue
+            if not math.isfinite(vals[field_name]):
+                problems.append((f"{prefix}.{name}.{field_name}",
+                                 f"{raw!r} is not a finite number"))
+                del vals[field_name]
         lo = vals.get("min", p.min)
         hi = vals.get("max", p.max)
         nom = vals.get("nominal", p.nominal)
@@ -57,6 +65,14 @@ def bound_overrides(overrides: Mapping[str, ParameterOverride], declared: Parame
         elif not lo <= nom <= hi:
             problems.append((f"{prefix}.{name}.nominal",
                              f"nominal {nom:g} {p.unit} outside [{lo:g}, {hi:g}] {p.unit}"))
+        if accepted is not None and name in accepted:  # the model refuses values outside
+            a = accepted[name]
+            told = {path for path, _ in problems}
+            problems += [(f"{prefix}.{name}.{field_name}",
+                          f"{v:g} {a.unit} is outside the range the model {model} accepts, "
+                          f"[{a.min:g}, {a.max:g}] {a.unit}")
+                         for field_name, v in vals.items() if not a.min <= v <= a.max
+                         and f"{prefix}.{name}.{field_name}" not in told]
         changes[name] = vals
     return changes, problems
 
@@ -164,11 +180,13 @@ def _variables(st: StageSpec, i: int, stages: Sequence[StageSpec],
 
 def check_stages(stages: Sequence[StageSpec], *, parameters: ParameterSet | None,
                  groups: Mapping[str, Sequence[str]], excitation=None,
-                 sensors: Sequence[str] | None = None) -> tuple[Problems, dict[str, Bounds]]:
+                 sensors: Sequence[str] | None = None, accepted: ParameterSet | None = None,
+                 model: str = "") -> tuple[Problems, dict[str, Bounds]]:
     """Every problem of the study's ``stages`` and each stage's bound overrides (by stage
     name), given what the study resolved: its ``parameters`` (None when they did not
-    resolve), its ``groups`` of parameters into design variables, its ``excitation`` and
-    the model's ``sensors`` (None: no model)."""
+    resolve), its ``groups`` of parameters into design variables, its ``excitation``, the
+    model's ``sensors`` (None: no model) and the parameters' ranges the ``model`` accepts
+    (``accepted``)."""
     problems: Problems = []
     stage_bounds: dict[str, Bounds] = {}
     names = [s.name for s in stages]
@@ -180,7 +198,8 @@ def check_stages(stages: Sequence[StageSpec], *, parameters: ParameterSet | None
             problems.append((f"{where}.name", f"duplicate stage name {st.name!r}"))
         space = None
         if parameters is not None:
-            bounds, found = bound_overrides(st.bounds, parameters, f"{where}.bounds")
+            bounds, found = bound_overrides(st.bounds, parameters, f"{where}.bounds",
+                                            accepted, model)
             stage_bounds[st.name] = bounds
             problems += found
             if not found:  # the stage's space is known (its variables permitting)

@@ -64,7 +64,9 @@ class Study:
         found, self.stage_bounds = check_stages(
             spec.stages, parameters=self.parameters, groups=self.groups,
             excitation=self.excitation,
-            sensors=None if self.model is None else self.model.sensors)
+            sensors=None if self.model is None else self.model.sensors,
+            accepted=None if self.model is None else self.model.parameters(),
+            model=self.spec.model.name)
         problems += found
         self.calibration_bounds = self._check_calibration(problems)
         self._check_comparison(problems)
@@ -122,16 +124,8 @@ class Study:
         declared = self.model.parameters()
         if self.gain is not None:
             declared = ParameterSet([*declared.values(), self.gain])
-        changes, found = bound_overrides(self.spec.parameters, declared, "parameters")
-        own = self.model.parameters()
-        for name, vals in changes.items():  # the model refuses values outside its own range
-            if name not in own:
-                continue
-            p = own[name]
-            found += [(f"parameters.{name}.{field_name}",
-                       f"{v:g} {p.unit} is outside the range the model "
-                       f"{self.spec.model.name} accepts, [{p.min:g}, {p.max:g}] {p.unit}")
-                      for field_name, v in vals.items() if not p.min <= v <= p.max]
+        changes, found = bound_overrides(self.spec.parameters, declared, "parameters",
+                                         self.model.parameters(), self.spec.model.name)
         problems += found
         return None if found else declared.with_bounds(changes)
 
