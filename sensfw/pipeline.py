@@ -165,9 +165,13 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
     result = StageResult(spec=stage, space=space, table=table, keys=ev.keys, scores=scores,
                          reference_key=ev.reference_key, failed=failed)
     if failed:
+        why = "; ".join(f"{k}: {v.splitlines()[0] if v else v}"
+                        for k, v in list(failed.items())[:5])
+        if len(failed) >= len(table):
+            raise AnalysisError(f"stage {stage.name!r}: all {len(table)} runs failed (each is "
+                                f"kept in the run store with its error): {why}")
         result.notes.append(f"{len(failed)} of {len(table)} runs failed and were left out: "
-                            + "; ".join(f"{k}: {v.splitlines()[0] if v else v}"
-                                        for k, v in list(failed.items())[:5]))
+                            + why)
     if stage.select is not None:
         by = stage.select.by or stage.scorers[0].key
         result.screening = design.analyze(space, table, scores[by].to_numpy(dtype=float))

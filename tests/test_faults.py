@@ -109,6 +109,22 @@ def test_oat_refuses_a_variable_with_no_run_but_keeps_the_runs(cli, tmp_path):
 
 
 @pytest.mark.slow  # real simulations through the CLI or a worker pool
+def test_a_stage_whose_every_run_fails_says_so_and_keeps_them(cli, tmp_path):
+    study = tmp_path / "s.toml"
+    # every k1 diverges, the nominal's too; a scorer without a reference run (with one, its
+    # failure is reported first)
+    text = STUDY.format(above=1.0).replace('name = "frf_db_rms", band = [60.0, 1900.0]',
+                                           'name = "rms"')
+    assert 'name = "rms"' in text
+    study.write_text(text)
+    proc = cli("run", study, "--out", tmp_path / "o", "--no-progress")
+    assert proc.returncode == 2, proc.stderr
+    assert "stage 'screen': all 13 runs failed" in proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert len(list((tmp_path / "o" / "runs").glob("*.json"))) == 13
+
+
+@pytest.mark.slow  # real simulations through the CLI or a worker pool
 def test_oat_uses_one_end_and_says_so(cli, tmp_path):
     study = tmp_path / "s.toml"
     study.write_text(STUDY.format(above=1e9))  # only k1's min run fails
