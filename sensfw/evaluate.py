@@ -132,13 +132,19 @@ def score_runs(scorers: Mapping[str, Any], runner, keys: list[str], labels: list
     ``known`` (run key -> row) holds scores computed before (``results.json``), which are
     used instead of scoring the stored signals again."""
     rows, failed = [], {}
+
+    def ours(column: str) -> str | None:  # the scorer a stored score column belongs to
+        return next((n for n in scorers if column == n or column.startswith(f"{n}.")), None)
+
     for label, key in zip(labels, keys, strict=True):
         rec = runner.store.record(key)
         row: dict[str, float] = {}
+        # a run other stages share holds their scores too: this stage's only, all of them
+        stored = {k: v for k, v in (known or {}).get(key, {}).items() if ours(k)}
         if rec is None or rec["status"] != "ok":
             failed[label] = "missing from the store" if rec is None else rec.get("error")
-        elif known is not None and key in known:
-            row = {k: np.nan if v is None else float(v) for k, v in known[key].items()}
+        elif stored and {ours(k) for k in stored} == set(scorers):
+            row = {k: np.nan if v is None else float(v) for k, v in stored.items()}
         else:
             res = runner.load(key)
             for name, scorer in scorers.items():

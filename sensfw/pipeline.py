@@ -269,10 +269,11 @@ def load_result(out_dir: str | Path) -> StudyResult:
         study_file = Path(data.get("study_file") or study_file)
     study = Study.load(study_file)
     known: dict[str, dict] = {}
-    for st in stages:
+    for st in stages:  # a run two stages share has the scores of both
         for r in st.get("runs", []):
-            known[r["key"]] = {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
-                               if r["label"] in v}
+            known.setdefault(r["key"], {}).update(
+                {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
+                 if r["label"] in v})
     validated = {st["name"]: st["validation"] for st in stages if "validation" in st}
     runs = StoredRuns(RunStore(out / "runs"), RunCounts(**data.get("runs", {})))
     return run_study(study, runs, known=known, validated=validated)

@@ -209,6 +209,24 @@ def test_run_study_writes_the_folder_load_result_reads(tmp_path):
     assert json.loads(json.dumps(results_json(again)))["stages"] == written["stages"]
 
 
+def test_a_rebuild_keeps_the_scores_of_every_stage_a_run_belongs_to(tmp_path):
+    """The DoE's centre and axis points are the screen's runs; scored under another label in
+    each stage, a rebuild (``sensfw report``) kept only the last stage's scores of a shared
+    run and failed with KeyError on the screen's label."""
+    from sensfw.pipeline import load_result, results_json, run_study
+    from sensfw.study import Study
+
+    spec = json.loads(json.dumps(LIBRARY_STUDY))
+    spec["stages"][0]["scorers"] = [{"name": "value", "label": "y_screen"}]
+    result = run_study(Study.from_dict(spec), out=tmp_path, report=False)
+    again = load_result(tmp_path)
+    def same(r):
+        return json.loads(json.dumps(results_json(r)))["stages"]
+
+    assert same(again) == same(result)
+    assert again.stages[0].selected == ["x1", "x2"]
+
+
 def test_a_group_screen_passes_the_members_of_its_selected_groups_on(tmp_path):
     """A screen by groups (``oat`` with ``groups``) selects groups; the next stage's
     ``selected:screen`` takes their members. y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3: x1 and

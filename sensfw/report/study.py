@@ -397,7 +397,7 @@ def write_study_report(result, path: str | Path) -> Path:
         if stage.surrogates and signals:
             page.figure(order_spectrum_mean(result, stage, study.output),
                         "Fig. 9 analogue: averaged order spectrum of the stage's runs.")
-        if stage.surrogates:
+        if any(stage.surrogates.values()):
             page.figure(actual_vs_predicted(stage),
                         "Fig. 10a analogue: simulated against predicted scores.")
             for label, reg in stage.regression.items():
@@ -409,6 +409,10 @@ def write_study_report(result, path: str | Path) -> Path:
                 page.p("Highlighted: p < 0.05. Coefficients in physical units (Fig. 10b).",
                        "meta")
             for label, per in stage.validation.items():
+                if not per:  # a section with nothing to show says so in one line
+                    page.p(f"{label}: no surrogate could be fitted to this score (the stage's "
+                           "notes above say why).", "meta")
+                    continue
                 page.h3(f"{label}: surrogates side by side (same {stage.table.shape[0]} runs)")
                 frame, dropped = drop_empty_columns(validation_table(per))
                 page.table(frame.astype(object).where(frame.notna(), "n/a"))
