@@ -41,6 +41,7 @@ from ..models.base import Signals
 from ..signal.stepped import detect_steps, direction_of
 from ..signal.sweep import SweepEstimate, estimate_sweep
 from .bands import band_rms
+from .columns import fits
 from .comparison import amount
 from .lines import frf_drive
 from .measurement import Measurement
@@ -63,6 +64,18 @@ def require_channels(meas: Measurement, channels: list[str]) -> None:
                                               f"{', '.join(['force', *have])}){hint}", ch)
 
 
+def require_units(meas: Measurement, model) -> None:
+    """Every measured channel the ``model`` also has is of the quantity the model computes
+    (its ``units``): a velocity compared as an acceleration is off by ``20 log10(omega)``
+    dB at every line (over 80 dB on the quick study's band), not a model error."""
+    for ch, unit in meas.signals.units.items():
+        want = model.units.get(ch) if ch != "force" else None
+        if want and unit and not fits(unit, want):
+            raise MeasurementError(meas.file, f"recorded in {unit}, but the model "
+                                              f"{model.name}'s {ch} is in {want}: record (or "
+                                              "label) the quantity the model computes", ch)
+
+
 def clipped_runs(x: np.ndarray, min_run: int = 4) -> int:
     """Number of flat runs of at least ``min_run`` equal samples at the signal's extremes."""
     a = np.max(np.abs(x))
@@ -79,8 +92,17 @@ def clipped_runs(x: np.ndarray, min_run: int = 4) -> int:
     return runs
 
 
-def check_clipping(meas: Measurement) -> None:
-    for name, x in [("force", meas.signals.force), *meas.signals.channels.items()]:
+def check_channels(meas: Measurement, used: list[str]) -> None:
+    """The excitation and the ``used`` channels (those the model computes too) neither
+    clipped nor silent (a constant response: a dead sensor or cable). Channels the model
+    does not have (a temperature, a torque) are not read."""
+    for name in used:
+        x = meas.signals.channels[name]
+        if np.ptp(x) == 0:
+            raise MeasurementError(meas.file, f"the response is constant ({x[0]:.4g}) over "
+                                              "the whole record: a dead sensor or cable?", name)
+    for name, x in [("force", meas.signals.force),
+                    *((c, meas.signals.channels[c]) for c in used)]:
         n = clipped_runs(x)
         if n:
             raise MeasurementError(meas.file, f"clipped: {n} flat top(s) at full scale "
@@ -223,12 +245,14 @@ def prepare(meas: Measurement, study) -> Measurement:
     every measurement command does first. An FRF-only measurement is driven by a stepped
     sine on its lines (:func:`sensfw.measure.lines.frf_drive`)."""
     require_channels(meas, [study.output])
+    if meas.frf is None:
+        require_units(meas, study.model)
     ex = study.excitation
     if meas.frf is not None:
         require_gain(meas, study)
         meas.drive = frf_drive(meas, study)
         return meas
-    check_clipping(meas)
+    check_channels(meas, [c for c in meas.signals.channels if c in study.model.sensors])
     sig = meas.signals
     est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
     if est.kind == "silent":

@@ -30,10 +30,10 @@ def quantity(unit: str):
 
 def factor(file: str, column: str, unit: str | None, target: str) -> float:
     """Multiplier from ``unit`` to ``target``."""
-    if not unit:
+    if not unit or unit == target:  # no unit, or one kept as it is (:func:`target`)
         return 1.0
     try:
-        return float(quantity(unit).to(target).magnitude)
+        return float(quantity(unit).to(target or "dimensionless").magnitude)
     except Exception as err:
         raise MeasurementError(file, f"unit {unit!r} cannot be converted to {target}: {err}",
                                column) from None
@@ -53,8 +53,9 @@ def sidecar(path: Path) -> dict:
     return {}
 
 
-#: the SI units a response channel is converted to: the first of its dimension
-SI_UNITS = ("m/s^2", "m/s", "m", "N", "V", "Pa", "rad/s^2", "rad/s", "rad")
+#: the SI units a response channel is converted to: the first of its dimension (a channel
+#: of none, a temperature, is kept in its own unit: offset units do not scale)
+SI_UNITS = ("m/s^2", "m/s", "m", "N", "N*m", "V", "A", "Pa", "rad/s^2", "rad/s", "rad")
 
 
 def fits(unit: str, si: str) -> bool:
@@ -72,7 +73,19 @@ def target(column: str, unit: str | None = None) -> str:
         return TARGET_UNITS[column]
     if column == "force":
         return "V" if unit and fits(unit, "V") else "N"
-    return next((si for si in SI_UNITS if unit and fits(unit, si)), ACCEL_UNIT)
+    if not unit:
+        return ACCEL_UNIT
+    si = next((si for si in SI_UNITS if fits(unit, si)), None)
+    if si is None and unit.strip() and _dimensionless(unit):
+        si = ""  # a strain, a ratio: kept as the number it is
+    return si if si is not None else unit
+
+
+def _dimensionless(unit: str) -> bool:
+    try:
+        return quantity(unit).dimensionless
+    except Exception:
+        return False
 
 
 def assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_declared,

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import ClassVar
 
 import numpy as np
 from pydantic import Field
@@ -69,6 +70,7 @@ class TwoDOF(Model):
     name = "two_dof"
     version = "1"
     sensors = ("a1", "a2")
+    units: ClassVar[Mapping[str, str]] = {"a1": "m/s^2", "a2": "m/s^2"}
     default_output = "a1"
 
     class Options(PluginOptions):

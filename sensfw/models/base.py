@@ -157,6 +157,9 @@ class Model(ABC):
     name: str = "model"
     version: str = "0"
     sensors: tuple[str, ...] = ()
+    #: the SI unit of each sensor's signal (``"m/s^2"``, ``"m/s"``, ...) where the model
+    #: states it: a measured channel of another quantity is refused, not compared
+    units: ClassVar[Mapping[str, str]] = {}
     default_output: str = ""
     #: effect name -> the places tried first when such an effect is added without
     #: ``attach`` (else the only place it fits; else the effect must say where)

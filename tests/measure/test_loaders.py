@@ -209,3 +209,34 @@ def test_a_velocity_channel_keeps_its_dimension(tmp_path, good):
     g.write_text(f.read_text().replace("Laser [m/s]", "Laser [mm/s]"))
     np.testing.assert_allclose(load(g).signals.channels["Laser"], 1e-3 * m.signals.channels[
         "Laser"], rtol=1e-9)
+
+
+def test_a_channel_of_another_quantity_than_the_models_is_refused(tmp_path, good):
+    """The 2-DOF model's a1 is an acceleration: the same record labelled m/s was compared
+    as if it were one (80 dB off on the quick study, exit 0)."""
+    f = csv(tmp_path, good)
+    g = tmp_path / "v.csv"
+    g.write_text(f.read_text().replace("a1 [m/s^2]", "a1 [m/s]"))
+    with pytest.raises(MeasurementError, match=r"v\.csv, channel 'a1': recorded in m/s, but "
+                                               r"the model two_dof's a1 is in m/s\^2"):
+        prepare(load(g), two_dof_study())
+    prepare(load(f), two_dof_study())  # the acceleration itself passes
+
+
+def test_a_dead_sensor_is_named_and_channels_the_model_lacks_are_kept_as_they_are(
+        tmp_path, good):
+    dead = Signals(t=good.t, force=good.force, channels={"a1": np.zeros_like(good.t)},
+                   fs=good.fs)
+    with pytest.raises(MeasurementError, match=r"channel 'a1': the response is constant"):
+        prepare(load(csv(tmp_path, dead, "dead.csv")), two_dof_study())
+    # a torque in N m, a temperature held constant, a strain: no dimension of the model's,
+    # read in their own units (SI where there is one) and neither converted nor checked
+    sig = Signals(t=good.t, force=good.force, fs=good.fs,
+                  channels={"a1": good.channels["a1"], "torque": 0.5 + 0 * good.t,
+                            "temperature": 20.0 + 0 * good.t, "strain": 1e-6 + 0 * good.t},
+                  units={"force": "N", "a1": "m/s^2", "torque": "N*cm", "temperature": "degC",
+                         "strain": "m/m"})
+    m = prepare(load(csv(tmp_path, sig, "extra.csv")), two_dof_study())
+    assert m.signals.units["torque"] == "N*m"
+    assert m.signals.channels["torque"][0] == pytest.approx(0.005)
+    assert m.signals.channels["temperature"][0] == pytest.approx(20.0)

@@ -57,6 +57,7 @@ class ShaftAssembly(Model):
     name = "shaft_assembly"
     version = "1"
     sensors = ("crank_axial", "crank_radial", "drive_axial", "drive_radial")
+    units: ClassVar[Mapping[str, str]] = {name: "m/s^2" for name in sensors}
     default_output = "crank_axial"
 
     #: where an effect goes without ``attach``: play and friction at the clutch's guide,
@@ -187,7 +188,7 @@ class ShaftAssembly(Model):
         t = excitation.time()
         return Signals(t=t, force=excitation.force(t), channels=channels, fs=excitation.fs,
                        f_inst=excitation.f_inst(t),
-                       units={"force": "N", **{c: "m/s^2" for c in channels}},
+                       units={"force": "N", **{c: self.units[c] for c in channels}},
                        meta={"model": self.name, "wall_s": time.perf_counter() - t0,
                              **choice.to_meta(), **stats.to_meta()},
                        sweep_end=excitation.sweep_end)
