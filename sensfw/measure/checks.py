@@ -152,10 +152,14 @@ def estimate_delay(measured: np.ndarray, reference: np.ndarray, fs: float,
     """Delay (s) of ``measured`` behind ``reference`` from the peak of their
     cross-correlation within ``around +- max_delay``, refined to a fraction of a sample by a
     parabola through the peak."""
-    n = min(len(measured), len(reference))
-    c = correlate(measured[:n], reference[:n], mode="full", method="fft")
-    lags = np.arange(-n + 1, n)
+    c = correlate(measured, reference, mode="full", method="fft")
+    lags = np.arange(-len(reference) + 1, len(measured))
     window = np.abs(lags - around * fs) <= int(max_delay * fs)
+    if not window.any():
+        return float(around)
+    if np.max(-c[window]) > 2.0 * max(np.max(c[window]), 0.0):
+        raise SignalError("the excitation correlates negatively with the study's sweep "
+                          "around its start: is the force channel's sign inverted?")
     c = np.where(window, c, -np.inf)
     i = int(np.argmax(c))
     if 0 < i < len(c) - 1 and np.isfinite(c[i - 1]) and np.isfinite(c[i + 1]):
@@ -175,11 +179,19 @@ def align_to_ideal(meas: Measurement, excitation: Excitation, est: SweepEstimate
         meas.notes.append(f"resampled from {sig.fs:g} Hz to {excitation.fs:g} Hz")
         sig = resample(sig, excitation.fs)
     ideal = excitation.force()
-    delay = estimate_delay(sig.force - est.offset, ideal, sig.fs, max_delay=0.002,
-                           around=est.t_start)
+    limit = 0.002
+    try:
+        delay = estimate_delay(sig.force - est.offset, ideal, sig.fs, max_delay=limit,
+                               around=est.t_start)
+    except SignalError as err:
+        raise MeasurementError(meas.file, str(err), "force") from None
     shift = round(delay * sig.fs)
     if shift:
         meas.notes.append(f"removed a delay of {delay * 1e3:.3f} ms ({shift} samples)")
+    if abs(delay - est.t_start) >= limit - 1.5 / sig.fs:
+        meas.notes.append(f"the delay found lies on its search limit ({est.t_start * 1e3:.3g} "
+                          f"+- {limit * 1e3:g} ms, the sweep's estimated start): the alignment "
+                          "is not to be trusted")
     n = excitation.n_samples
 
     def cut(x):

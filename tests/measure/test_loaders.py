@@ -153,6 +153,25 @@ def test_sweep_estimate_and_alignment(good):
     assert any("resampled" in n for n in meas.notes)
 
 
+def test_a_pre_trigger_longer_than_the_sweep_is_aligned_and_an_inverted_force_named(good):
+    """The cross-correlation cut the record to the ideal sweep's length, so a sweep that
+    starts later than that (here 0.5 s into a record of a 0.35 s chirp) had no lag to be
+    found: a bogus negative delay, then the model compared with silence and a crash."""
+    d = 10000  # 0.5 s at 20 kHz
+    late = Signals(t=np.arange(len(good.t) + d) / good.fs,
+                   force=np.concatenate([np.zeros(d), good.force]),
+                   channels={"a1": np.concatenate([np.zeros(d), good.channels["a1"]])},
+                   fs=good.fs)
+    est = estimate_sweep(late.force, late.fs)
+    out = align_to_ideal(Measurement("x.csv", late), EX, est)
+    assert out.meta["delay_s"] == pytest.approx(0.5, abs=0.2 / good.fs)
+    np.testing.assert_allclose(out.force, good.force[: EX.n_samples], atol=1e-9)
+    flipped = Signals(t=good.t, force=-good.force, channels=good.channels, fs=good.fs)
+    with pytest.raises(MeasurementError, match=r"channel 'force': .*sign inverted"):
+        align_to_ideal(Measurement("x.csv", flipped), EX,
+                       estimate_sweep(flipped.force, flipped.fs))
+
+
 def test_uff58_roundtrip(tmp_path, good):
     import pyuff
 
