@@ -151,7 +151,8 @@ def compare(
                       if r["measured_hz"] and r["model_hz"])
         noise = "" if c.error_noise_db is None else \
             f" (the measurement's noise alone: {c.error_noise_db:.2f} dB)"
-        out.print(f"{c.level_text}: FRF error {c.error_db:.2f} dB over {lo:g}-{hi:g} Hz"
+        clo, chi = c.error_band or (lo, hi)  # a record sampled slowly: its own band
+        out.print(f"{c.level_text}: FRF error {c.error_db:.2f} dB over {clo:g}-{chi:.4g} Hz"
                   f"{noise}{res}{thd}")
     for b in result.bands:
         if b.resonance_low is None:

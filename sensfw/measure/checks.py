@@ -48,6 +48,18 @@ from .measurement import Measurement
 
 #: relative tolerance on f0, f1 and duration for "the record is the study's sweep"
 SWEEP_TOLERANCE = 0.03
+#: a record's usable bandwidth is its sample rate over this (the pass band of a data
+#: acquisition's anti-aliasing filter: LMS, B&K and NI analysers show fs / 2.56)
+ALIAS_FREE = 2.56
+
+
+def recorded_band(meas: Measurement, band: tuple[float, float]) -> tuple[float, float]:
+    """``band`` cut to what the record holds (:data:`ALIAS_FREE`), at its own sample rate
+    (before any resampling to the study's)."""
+    fs = meas.signals.meta.get("recorded_fs", meas.signals.fs)
+    return band[0], min(band[1], fs / ALIAS_FREE)
+
+
 #: largest slow amplitude drift for which the ideal sweep stands for the applied force: a
 #: nonlinear model feels the drift (measured on the quick study at 0.45 N: a +-20 % drift
 #: driven by the ideal chirp left 1.9 dB FRF error against a 1.1 dB noise floor)
@@ -144,7 +156,7 @@ def resample(sig: Signals, fs: float) -> Signals:
     channels = {k: resample_poly(v, up, down) for k, v in sig.channels.items()}
     n = len(force)
     return Signals(t=np.arange(n) / fs, force=force, channels=channels, fs=fs,
-                   units=dict(sig.units), meta=dict(sig.meta))
+                   units=dict(sig.units), meta={"recorded_fs": sig.fs, **sig.meta})
 
 
 def estimate_delay(measured: np.ndarray, reference: np.ndarray, fs: float,
@@ -266,6 +278,16 @@ def prepare(meas: Measurement, study) -> Measurement:
         return meas
     check_channels(meas, [c for c in meas.signals.channels if c in study.model.sensors])
     sig = meas.signals
+    span = len(sig.force) / sig.fs
+    f0, f1 = ex.f0, ex.f1
+    if span < 2.0 / f0:
+        raise MeasurementError(meas.file, f"the record is {span:.3g} s long ({len(sig.force)} "
+                               f"samples), less than two periods of the study's lowest "
+                               f"frequency, {f0:g} Hz: too short for its FRF", "time")
+    if sig.fs / ALIAS_FREE < f1:
+        meas.notes.append(f"sampled at {sig.fs:g} Hz: its lines above {sig.fs / ALIAS_FREE:.4g} "
+                          f"Hz (fs / {ALIAS_FREE:g}, the anti-aliasing filter's pass band) are "
+                          f"left out of the comparison, below the study's {f1:g} Hz")
     est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
     if est.kind == "silent":
         raise MeasurementError(meas.file, "the excitation channel is silent", "force")
@@ -288,6 +310,10 @@ def prepare(meas: Measurement, study) -> Measurement:
                               f"{describe(est)}; the model is driven by the measured record")
         else:
             meas.notes.append(f"the model is driven by the measured record ({describe(est)})")
+        if sig.fs < ex.fs * (1 - 1e-6):  # the model's output sampled as slowly would alias
+            meas.notes.append(f"resampled from {sig.fs:g} Hz to the study's {ex.fs:g} Hz, so "
+                              "the model's response is sampled as the study's")
+            meas.signals = resample(sig, ex.fs)
         meas.drive = measured_drive(meas, est, meas.level)
         return meas
     if mismatch:  # drive = "ideal" asked for explicitly

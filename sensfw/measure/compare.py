@@ -31,6 +31,7 @@ from .bands import (
     octave_bands,
     third_octave_bands,
 )
+from .checks import recorded_band
 from .comparison import ERROR_DEFINITION, Comparison, LevelComparison, display_unit
 from .distortion import (
     dc_offset,
@@ -178,8 +179,15 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
             if sig is None:
                 raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
                                   f"{m.input_unit}); its error is in the run store")
-            c = compare_level(m.signals, sig, study.output, band, m.level, m.file,
-                              error_band=error_band or band)
+            own = band if m.frf is not None else recorded_band(m, band)
+            err = error_band or band
+            err = (err[0], min(err[1], own[1]))
+            if err[0] >= err[1]:
+                raise SensfwError(f"{m.file}: the error band {err[0]:g}-{(error_band or band)[1]:g}"
+                                  f" Hz holds no line of the record (up to {own[1]:.4g} Hz) "
+                                  f"inside the study's band {band[0]:g}-{band[1]:g} Hz")
+            c = compare_level(m.signals, sig, study.output, own, m.level, m.file,
+                              error_band=err)
             if m.sweep is not None and c.kind == "sweep":
                 c.kind = m.sweep.kind
             levels.append(c)

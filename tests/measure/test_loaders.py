@@ -259,3 +259,31 @@ def test_a_dead_sensor_is_named_and_channels_the_model_lacks_are_kept_as_they_ar
     assert m.signals.units["torque"] == "N*m"
     assert m.signals.channels["torque"][0] == pytest.approx(0.005)
     assert m.signals.channels["temperature"][0] == pytest.approx(20.0)
+
+
+def test_a_record_sampled_slower_than_the_study_is_compared_on_its_own_band(tmp_path, good):
+    """A 2-DOF record decimated to 4 kHz (scipy's anti-aliasing FIR): the model runs at the
+    study's 20 kHz, the record is resampled to it, and the error figure takes the lines up
+    to fs / 2.56 = 1562.5 Hz (the analyser's pass band), not the study's 2 kHz, where the
+    record holds nothing. The model is the record's own: the error stays within the
+    resampling's round trip (0.1 dB). Two periods of 50 Hz is the shortest record."""
+    from scipy.signal import decimate
+
+    from sensfw.measure.compare import compare_measurements
+    from sensfw.runs import Runner, RunStore
+
+    slow = Signals(t=good.t[::5], force=decimate(good.force, 5, ftype="fir"),
+                   channels={"a1": decimate(good.channels["a1"], 5, ftype="fir")},
+                   fs=good.fs / 5)
+    study = two_dof_study()
+    m = prepare(load(csv(tmp_path, slow, "slow.csv", level=1.0)), study)
+    assert m.signals.fs == 20000 and any("fs / 2.56" in n for n in m.notes)
+    with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
+        c = compare_measurements(study, [m], runner).levels[0]
+    assert c.error_band == pytest.approx((50.0, 1562.5))
+    assert c.error_db < 0.1
+    n = 700  # 35 ms of a 20 kHz record: less than two periods of 50 Hz (40 ms)
+    short = Signals(t=good.t[:n], force=good.force[:n], channels={"a1": good.channels["a1"][:n]},
+                    fs=good.fs)
+    with pytest.raises(MeasurementError, match=r"channel 'time': the record is 0.035 s long"):
+        prepare(load(csv(tmp_path, short, "short.csv")), study)
