@@ -88,6 +88,23 @@ def _dimensionless(unit: str) -> bool:
         return False
 
 
+def _declared(file: str, name: str, value, unit: str) -> float | None:
+    """A sidecar's ``fs`` or ``level``: a positive number, or a quantity with units
+    (``"20 kHz"``, ``"0.1 N"``) converted to ``unit``."""
+    if value is None:
+        return None
+    from ..study import to_unit
+
+    try:
+        x = float(value) if not isinstance(value, str) else to_unit(value, unit)
+    except (TypeError, ValueError) as err:
+        raise MeasurementError(file, f"the sidecar's {name} = {value!r} is not a number or a "
+                                     f"quantity in {unit}: {err}", name) from None
+    if not (np.isfinite(x) and x > 0):
+        raise MeasurementError(file, f"the sidecar's {name} = {value!r} must be positive", name)
+    return x
+
+
 def assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_declared,
               level) -> Measurement:
     if "time" not in columns:
@@ -110,6 +127,8 @@ def assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_decla
         raise MeasurementError(file, f"non-uniform sampling: step {dt[worst]:.6g} s at row "
                                      f"{worst + 2} vs {step:.6g} s elsewhere", "time")
     fs = 1.0 / step
+    fs_declared = _declared(file, "fs", fs_declared, "Hz")
+    level = _declared(file, "level", level, target("force", unit_map.get("force")))
     if fs_declared is not None and abs(fs - float(fs_declared)) > 1e-3 * float(fs_declared):
         raise MeasurementError(file, f"sample rate from the time column is {fs:.6g} Hz but the "
                                      f"sidecar declares fs = {fs_declared} Hz", "time")

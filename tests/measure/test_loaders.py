@@ -287,3 +287,15 @@ def test_a_record_sampled_slower_than_the_study_is_compared_on_its_own_band(tmp_
                     fs=good.fs)
     with pytest.raises(MeasurementError, match=r"channel 'time': the record is 0.035 s long"):
         prepare(load(csv(tmp_path, short, "short.csv")), study)
+
+
+def test_a_sidecars_fs_and_level_may_carry_units_and_must_be_positive(tmp_path, good):
+    f = csv(tmp_path, good)
+    f.with_suffix(".toml").write_text('fs = "20 kHz"\nlevel = "100 mN"\n')
+    m = load(f)
+    assert m.level == pytest.approx(0.1) and m.fs == pytest.approx(20000)
+    for text, match in (('level = -0.1\n', r"channel 'level': .* must be positive"),
+                        ('fs = "fast"\n', r"channel 'fs': the sidecar's fs = 'fast' is not")):
+        f.with_suffix(".toml").write_text(text)
+        with pytest.raises(MeasurementError, match=match):
+            load(f)
