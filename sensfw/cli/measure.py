@@ -70,7 +70,16 @@ def simulate(
         raise SensfwError(f"--levels {levels!r}: expected numbers separated by commas") \
             from None
     if any(v is not None and not v > 0 for v in values):
-        raise SensfwError(f"--levels {levels!r}: levels must be positive")
+        raise SensfwError(f"--levels {levels!r}: levels must be positive" if levels else
+                          f"--amplitude {amplitude!r}: must be positive")
+    for option, value in (("--noise", noise), ("--drift", drift), ("--delay", delay)):
+        if not value >= 0:
+            raise SensfwError(f"{option} {value!r}: must be >= 0")
+    if channel_gain is not None and not channel_gain > 0:
+        raise SensfwError(f"--channel-gain {channel_gain!r}: a shaker gain in N/V must be "
+                          "positive")
+    if out_file.suffix.lower() not in (".csv", ".uff", ".unv"):
+        raise SensfwError(f"--out {out_file}: write a .csv (one file per level) or a .uff")
     records = []
     for i, level in enumerate(values):
         rig = Rig(noise=noise, offset=offset, drift=drift, delay=delay, gain=channel_gain,

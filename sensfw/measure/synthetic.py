@@ -65,6 +65,13 @@ class Rig:
     gain: float | None = None
     seed: int | None = 0
 
+    def __post_init__(self) -> None:
+        for name in ("noise", "drift", "delay"):
+            if not getattr(self, name) >= 0:
+                raise SensfwError(f"rig {name} must be >= 0, got {getattr(self, name)!r}")
+        if self.gain is not None and not self.gain > 0:
+            raise SensfwError(f"rig gain (N/V) must be positive, got {self.gain!r}")
+
 
 def excitation_of(study: Study, kind: str | None, amplitude: float | None) -> Excitation:
     """The study's excitation, or another ``kind`` over the same band, duration, rate and

@@ -218,3 +218,19 @@ def test_other_excitations_drive_the_model_and_it_agrees_with_itself(kind, cli, 
     # the record's one error figure is what its noise alone gives a correct model (within
     # the spread of three noise draws)
     assert err["value"] < 1.3 * err["noise_alone"], err
+
+
+@pytest.mark.slow  # five CLI processes
+def test_simulate_refuses_rig_settings_that_cannot_be(cli, tmp_path):
+    """Each failed deep inside (a negative delay: numpy's "negative dimensions"), was taken
+    silently (a negative noise, a gain of 0) or wrote CSV text into a .mat file."""
+    study = ROOT / "studies" / "quick.toml"
+    for args, message in ((["--delay", "-0.01"], "--delay -0.01: must be >= 0"),
+                          (["--noise", "-0.1"], "--noise -0.1: must be >= 0"),
+                          (["--amplitude", "-0.1"], "--amplitude -0.1: must be positive"),
+                          (["--channel-gain", "0"], "--channel-gain 0.0: a shaker gain"),
+                          (["--out", tmp_path / "m.mat"], "write a .csv")):
+        out = [] if "--out" in args else ["--out", tmp_path / "m.csv"]
+        proc = cli("simulate", study, *out, *args)
+        assert proc.returncode == 2 and message in proc.stderr, (args, proc.stderr)
+        assert "Traceback" not in proc.stderr
