@@ -101,6 +101,12 @@ def frf_drive(meas: Measurement, study) -> SteppedSine:
         meas.notes.append(f"the record states no level: the model is driven at the study's "
                           f"{level:g} {ex.unit}")
         meas.level = float(level)
+    if rec.kind == "random":
+        meas.notes.append(
+            f"FRF-only record of a random test: its level {level:g} is the rig's setting, "
+            "not the amplitude of the sine the model is stepped with (a random drive's RMS in "
+            "the band is far below it and not in an FRF file), so a nonlinear model is driven "
+            "harder than the rig was: compare the time record, or state its RMS as the level")
     direction = rec.direction or "up"
     if rec.direction is None:
         meas.notes.append("the record states no sweep direction: the model steps upwards")
