@@ -70,7 +70,8 @@ def require_channels(meas: Measurement, channels: list[str]) -> None:
     have = list(meas.signals.channels)
     for ch in channels:
         if ch not in have:
-            close = difflib.get_close_matches(ch, have, n=1, cutoff=0.5)
+            close = [h for h in have if h.lower() == ch.lower()] or \
+                difflib.get_close_matches(ch, have, n=1, cutoff=0.5)
             hint = f"; did you mean {close[0]!r}?" if close else ""
             raise MeasurementError(meas.file, f"missing channel (file has "
                                               f"{', '.join(['force', *have])}){hint}", ch)

@@ -37,7 +37,7 @@ def read_csv(path: str | Path) -> Measurement:
     path = Path(path)
     file = str(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark, as Excel writes
     except FileNotFoundError:
         raise MeasurementError(file, "file not found") from None
     except UnicodeDecodeError:
@@ -46,19 +46,23 @@ def read_csv(path: str | Path) -> Measurement:
     if len(lines) < 3:
         raise MeasurementError(file, "needs a header row and at least two data rows")
     delim = ";" if lines[0].count(";") > lines[0].count(",") else ","
-    header = [h.strip() for h in lines[0].split(delim)]
+    header = [h.strip().strip('"').strip("'").strip() for h in lines[0].split(delim)]
     names, header_units = [], {}
     for h in header:
         m = _HEADER.match(h)
         if not m:
             raise MeasurementError(file, f"cannot read column header {h!r}")
-        names.append(m.group(1).strip())
+        name = m.group(1).strip()
+        if name.lower() in ("time", "force"):  # "Time [s]", "FORCE [N]"
+            name = name.lower()
+        names.append(name)
         if m.group(2):
-            header_units[m.group(1).strip()] = m.group(2).strip()
+            header_units[name] = m.group(2).strip()
     if len(set(names)) != len(names):
         raise MeasurementError(file, f"duplicate column names in header {names}")
     try:
-        data = np.genfromtxt(lines[1:], delimiter=delim, dtype=float)
+        data = np.genfromtxt([ln.replace('"', "") for ln in lines[1:]], delimiter=delim,
+                             dtype=float)  # numbers written quoted, as some exports do
     except ValueError as err:
         raise MeasurementError(file, f"malformed data rows: {err}") from None
     data = np.atleast_2d(data)

@@ -85,6 +85,11 @@ def test_missing_or_misnamed_channel(tmp_path, good):
     with pytest.raises(MeasurementError, match=r"channel 'crank_axial'.*did you mean "
                                                r"'crank_axal'"):
         require_channels(load(g), ["crank_axial"])
+    ren = Signals(t=good.t, force=good.force, channels={"Crank_Axial": good.channels["a1"],
+                                                        "crank_radial": good.channels["a1"]},
+                  fs=good.fs)
+    with pytest.raises(MeasurementError, match=r"did you mean 'Crank_Axial'"):
+        require_channels(load(csv(tmp_path, ren, "c.csv")), ["crank_axial"])
 
 
 def test_clipping(tmp_path, good):
@@ -299,3 +304,19 @@ def test_a_sidecars_fs_and_level_may_carry_units_and_must_be_positive(tmp_path, 
         f.with_suffix(".toml").write_text(text)
         with pytest.raises(MeasurementError, match=match):
             load(f)
+
+
+def test_csv_as_spreadsheets_write_it(tmp_path, good):
+    """A byte-order mark (Excel's "CSV UTF-8"), quoted cells and capitalised Time / Force
+    headers read as the plain file does (each refused before)."""
+    f = csv(tmp_path, good)
+    plain = load(f)
+    rows = f.read_text().splitlines()
+    head = rows[0].replace("time", "Time").replace("force", "FORCE")
+    quoted = [",".join(f'"{c}"' for c in r.split(",")) for r in [head, *rows[1:]]]
+    g = tmp_path / "excel.csv"
+    g.write_text("\n".join(quoted) + "\n", encoding="utf-8-sig")
+    m = load(g)
+    assert m.fs == pytest.approx(plain.fs)
+    np.testing.assert_array_equal(m.signals.channels["a1"], plain.signals.channels["a1"])
+    np.testing.assert_array_equal(m.signals.force, plain.signals.force)
