@@ -278,6 +278,14 @@ def test_a_stages_bounds_are_held_to_the_models_range_like_the_parameters():
     assert problems(data) == {"parameters.slide_damping.min": "nan is not a finite number"}
 
 
+def test_a_gaussian_process_kernel_in_a_study_file_is_refused_when_checked():
+    # a kernel is a scikit-learn object (passed by code); a string passed validation and
+    # failed in scikit-learn at the fit, after every run of the stage
+    data = copy.deepcopy(QUICK)
+    data["stages"][1]["surrogates"] = [{"name": "gaussian_process", "kernel": "foo"}]
+    assert "got 'foo'" in problems(data)["stages[1].surrogates[0].kernel"]
+
+
 def test_the_groups_table_is_checked_at_its_dotted_path():
     # each a StudyError naming groups.NAME (before, an unknown member or a doubly grouped
     # parameter escaped as a bare ParameterError, and a group named like a parameter outside

@@ -5,13 +5,22 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
 from scipy import stats
 from sklearn.utils.validation import check_is_fitted
 
 from ..options import Bool, Int, Pairs, PluginOptions, Str
 from ..plugins import surrogates
 from .base import BOUNDS, SEED, RandomState, SurrogateBase, SurrogateError, feature_names, scaling
+
+
+def _kernel(value):
+    """A scikit-learn kernel object or none (a study file's string is neither)."""
+    from sklearn.gaussian_process.kernels import Kernel
+
+    if value is not None and not isinstance(value, Kernel):
+        raise ValueError(f"not a scikit-learn kernel: {value!r}")
+    return value
 
 
 @surrogates.register("gaussian_process")
@@ -36,7 +45,8 @@ class GaussianProcess(SurrogateBase):
         noise: Bool = Field(description="true or false")
         log_features: Literal["auto"] | list[Str] | None = Field(
             description="'auto', a list of variable names or none")
-        kernel: Any = Field(description="a fitted scikit-learn kernel to start from, or none")
+        kernel: Annotated[Any, AfterValidator(_kernel)] = Field(
+            description="a fitted scikit-learn kernel to start from, or none")
         optimize: Bool = Field(description="true or false")
     loo_method = "closed form (R&W Eq. 5.12)"
 
