@@ -244,6 +244,9 @@ def test_options_that_fail_only_together_and_designs_that_do_not_fit_the_space()
     data["stages"][0]["design_options"] = {"groups": {"a": ["slide_stiffness", "nope"]}}
     assert problems(data)["stages[0].design_options.groups"] == (
         "design 'oat': unknown variables in groups: ['nope']")
+    data["stages"][0]["design"] = "morris"  # Morris's groups too (they failed at the run)
+    assert problems(data)["stages[0].design_options.groups"] == (
+        "design 'morris': unknown variables in groups: ['nope']")
 
 
 def test_seeds_amplitudes_timeouts_and_variable_lists_that_cannot_work_are_refused():

@@ -59,6 +59,8 @@ class Morris(Design):
 
     def _n_groups(self, space):
         g = self.options["groups"]
+        if g:  # checked when counted, so a study's validation reports it
+            check_groups(self.name, g, space.names)
         return len(g) if g else len(space)
 
     def n_runs(self, space: DesignSpace) -> int:
