@@ -53,10 +53,14 @@ SWEEP_TOLERANCE = 0.03
 ALIAS_FREE = 2.56
 
 
-def recorded_band(meas: Measurement, band: tuple[float, float]) -> tuple[float, float]:
-    """``band`` cut to what the record holds (:data:`ALIAS_FREE`), at its own sample rate
-    (before any resampling to the study's)."""
+def recorded_band(meas: Measurement, band: tuple[float, float], study_fs: float
+                  ) -> tuple[float, float]:
+    """``band`` cut to what a record sampled below the study's rate ``study_fs`` holds, at
+    its own rate (before any resampling to the study's): up to its fs / :data:`ALIAS_FREE`.
+    A record at the study's rate or above is compared on the study's band, as asked."""
     fs = meas.signals.meta.get("recorded_fs", meas.signals.fs)
+    if fs >= study_fs * (1 - 1e-6):
+        return band
     return band[0], min(band[1], fs / ALIAS_FREE)
 
 
@@ -285,7 +289,7 @@ def prepare(meas: Measurement, study) -> Measurement:
         raise MeasurementError(meas.file, f"the record is {span:.3g} s long ({len(sig.force)} "
                                f"samples), less than two periods of the study's lowest "
                                f"frequency, {f0:g} Hz: too short for its FRF", "time")
-    if sig.fs / ALIAS_FREE < f1:
+    if sig.fs < ex.fs * (1 - 1e-6) and sig.fs / ALIAS_FREE < f1:
         meas.notes.append(f"sampled at {sig.fs:g} Hz: its lines above {sig.fs / ALIAS_FREE:.4g} "
                           f"Hz (fs / {ALIAS_FREE:g}, the anti-aliasing filter's pass band) are "
                           f"left out of the comparison, below the study's {f1:g} Hz")

@@ -179,7 +179,7 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
             if sig is None:
                 raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
                                   f"{m.input_unit}); its error is in the run store")
-            own = band if m.frf is not None else recorded_band(m, band)
+            own = band if m.frf is not None else recorded_band(m, band, ex.fs)
             err = error_band or band
             err = (err[0], min(err[1], own[1]))
             if err[0] >= err[1]:
