@@ -284,15 +284,15 @@ def prepare(meas: Measurement, study) -> Measurement:
     check_channels(meas, [c for c in meas.signals.channels if c in study.model.sensors])
     sig = meas.signals
     span = len(sig.force) / sig.fs
-    f0, f1 = ex.f0, ex.f1
-    if span < 2.0 / f0:
+    if span < 2.0 / ex.f0:
         raise MeasurementError(meas.file, f"the record is {span:.3g} s long ({len(sig.force)} "
                                f"samples), less than two periods of the study's lowest "
-                               f"frequency, {f0:g} Hz: too short for its FRF", "time")
-    if sig.fs < ex.fs * (1 - 1e-6) and sig.fs / ALIAS_FREE < f1:
-        meas.notes.append(f"sampled at {sig.fs:g} Hz: its lines above {sig.fs / ALIAS_FREE:.4g} "
-                          f"Hz (fs / {ALIAS_FREE:g}, the anti-aliasing filter's pass band) are "
-                          f"left out of the comparison, below the study's {f1:g} Hz")
+                               f"frequency, {ex.f0:g} Hz: too short for its FRF", "time")
+    if sig.fs < ex.fs * (1 - 1e-6) and sig.fs / ALIAS_FREE < ex.f1:
+        meas.notes.append(f"sampled at {sig.fs:g} Hz: it holds no lines above "
+                          f"{sig.fs / ALIAS_FREE:.4g} Hz (fs / {ALIAS_FREE:g}, the anti-aliasing "
+                          f"filter's pass band), below the study's {ex.f1:g} Hz; compare's "
+                          "error leaves them out")
     est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
     if est.kind == "silent":
         raise MeasurementError(meas.file, "the excitation channel is silent", "force")
