@@ -532,7 +532,7 @@ def sentences(found: dict, table: dict, thresholds: dict | None = None) -> list[
     th = {**THRESHOLDS, **(thresholds or {})}
     unit = table.get("unit", "N")
     lv = table["levels"]
-    if len(lv) < 2:
+    if len(set(lv)) < 2:  # also two records of one level (a sweep and its FRF), as classes
         return ["One excitation level: the amplitude dependence needs two or more."]
     if not found:
         return [f"Between {_lv(lv[0], unit)} and {_lv(lv[-1], unit)} the differences "

@@ -217,6 +217,11 @@ def test_one_level_gives_a_table_and_no_class():
         pytest.approx(100 * math.log(1410 / 1500))
     assert amp["sentences"] == ["One excitation level: the amplitude dependence needs two or "
                                 "more."]
+    # two records of one level (a time record and its FRF) say the same, not "Between 0.1 N
+    # and 0.1 N ... no signature"
+    two = levels_of([(1410.0, 0.005)] * 3, [(1500.0, 0.005)] * 3)[:2]
+    two[1].level = two[0].level
+    assert amplitude_dependence(two)["sentences"] == amp["sentences"]
 
 
 def test_allows_prunes_by_declared_classes_and_never_without_evidence():
