@@ -82,7 +82,8 @@ def check_groups(design: str, groups: dict[str, list[str]], names: list[str]
     problems = (("unknown variables", sorted(set(member) - set(names))),
                 ("variables without a group", [v for v in names if v not in member]),
                 ("variables in two groups", sorted({v for v in member
-                                                    if member.count(v) > 1})))
+                                                    if member.count(v) > 1})),
+                ("empty groups", [g for g, vs in groups.items() if not vs]))
     for what, bad in problems:
         if bad:
             raise DesignError(f"design {design!r}: {what} in groups: {bad}", option="groups")

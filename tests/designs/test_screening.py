@@ -88,6 +88,8 @@ def test_oat_with_groups_moves_each_group_together_and_ranks_groups():
         make_design("oat", groups={"a": ["x1", "x2", "x3", "x4"]}).generate(space)
     with pytest.raises(DesignError, match=r"unknown variables.*x9"):
         make_design("oat", groups={"a": ["x1", "x2", "x3", "x4", "x5", "x9"]}).n_runs(space)
+    with pytest.raises(DesignError, match=r"'oat': empty groups in groups: \['e'\]"):
+        make_design("oat", groups={"a": ["x1", "x2", "x3", "x4", "x5"], "e": []}).n_runs(space)
     with pytest.raises(DesignError, match=r"'morris': variables in two groups.*x1"):
         make_design("morris", groups={"a": ["x1", "x2"], "b": ["x1", "x3", "x4", "x5"]}
                     ).generate(space)
