@@ -174,6 +174,12 @@ class DesignVariable:
         return out
 
 
+def clashing_group_names(groups: Mapping[str, Sequence[str]], parameters) -> list[str]:
+    """Group names that are parameters outside their own group: each would hide that
+    parameter's own design variable (the study reports them at ``groups.NAME``)."""
+    return [g for g, ms in groups.items() if g in parameters and g not in ms]
+
+
 class DesignSpace:
     """The design variables of one stage plus the fixed values of every other parameter."""
 
@@ -207,7 +213,7 @@ class DesignSpace:
         params = parameters.with_bounds(bounds or {})
         groups = {k: tuple(v) for k, v in (groups or {}).items()}
         grouped = {m for ms in groups.values() for m in ms}
-        clash = [g for g, ms in groups.items() if g in params and g not in ms]
+        clash = clashing_group_names(groups, params)
         if clash:
             raise ParameterError(f"group name(s) {clash} are parameters outside their groups: "
                                  "each would hide that parameter; name the groups otherwise")

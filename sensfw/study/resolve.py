@@ -15,7 +15,7 @@ from ..errors import SensfwError, StudyError
 from ..excitation import Excitation, make_excitation
 from ..models.base import IMPLICIT_METHODS, Model, SolverSettings
 from ..models.stepsize import CALIBRATED_METHODS
-from ..params import DesignSpace, Parameter, ParameterSet
+from ..params import DesignSpace, Parameter, ParameterSet, clashing_group_names
 from .checks import Problems, bound_overrides, check_stages, plugin_problems
 from .schema import GainSection, StageSpec, StudyFile
 from .units import to_unit
@@ -236,10 +236,10 @@ class Study:
                                      seen[m] == g else f"parameter {m!r} is already in "
                                      f"group {seen[m]!r}"))
                 seen[m] = g
-            if self.parameters is not None and g in self.parameters and g not in members:
-                problems.append((f"groups.{g}", f"the group's name is the parameter {g!r}, "
-                                                "which is not one of its members; name the "
-                                                "group otherwise"))
+        if self.parameters is not None:
+            problems += [(f"groups.{g}", f"the group's name is the parameter {g!r}, which is "
+                                         "not one of its members; name the group otherwise")
+                         for g in clashing_group_names(groups, self.parameters)]
         return groups
 
     def variable_names(self) -> list[str]:
