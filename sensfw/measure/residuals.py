@@ -31,6 +31,7 @@ from ..runs import Runner
 from ..study import Study
 from . import discrepancy
 from .calibration import Trial
+from .checks import recorded_band
 from .compare import LevelComparison, compare_level
 from .io import Measurement
 
@@ -63,6 +64,16 @@ class Residuals:
         self.kind_weights: dict[str, float] = {}
         ex = study.excitation
         self.band = (ex.f0, ex.f1)
+        #: per record, the band it is compared on: the study's, cut to what a record
+        #: sampled below the study's rate holds (:func:`~sensfw.measure.checks.recorded_band`,
+        #: as ``compare`` cuts it)
+        self.bands = [self.band if m.frf is not None else
+                      recorded_band(m, self.band, ex.fs) for m in self.meas]
+        for m, b in zip(self.meas, self.bands, strict=True):
+            if b[0] >= b[1]:
+                raise SensfwError(f"{m.file}: sampled at {m.signals.meta.get('recorded_fs')}"
+                                  f" Hz, the record holds no line of the study's band "
+                                  f"{self.band[0]:g}-{self.band[1]:g} Hz (up to {b[1]:.4g} Hz)")
         self.n_simulations = 0
         #: the step of the caller's method the next simulations count for (``spent``)
         self.step = "start"
@@ -111,7 +122,7 @@ class Residuals:
                     comps = None
                     break
                 m = self.meas[i]
-                comps += [compare_level(m.signals, sig, ch, self.band, m.level, m.file,
+                comps += [compare_level(m.signals, sig, ch, self.bands[i], m.level, m.file,
                                         detail=detail) for ch in self.channels]
             out.append(comps)
         if self.entries is None and levels is None:

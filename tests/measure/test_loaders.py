@@ -320,3 +320,29 @@ def test_csv_as_spreadsheets_write_it(tmp_path, good):
     assert m.fs == pytest.approx(plain.fs)
     np.testing.assert_array_equal(m.signals.channels["a1"], plain.signals.channels["a1"])
     np.testing.assert_array_equal(m.signals.force, plain.signals.force)
+
+
+def test_a_slow_record_is_calibrated_on_its_own_band_as_compare_compares_it(tmp_path, good):
+    """The residuals of calibrate/diagnose/augment cut a slow record's band as ``compare``
+    does: the 4 kHz record of the test above enters with bands up to fs / 2.56 = 1562.5 Hz
+    only. Above, the record holds its anti-aliasing filter's stop band, and the model
+    (the record's own) would be charged for it."""
+    from scipy.signal import decimate
+
+    from sensfw.measure.residuals import Residuals
+    from sensfw.runs import Runner, RunStore
+
+    slow = Signals(t=good.t[::5], force=decimate(good.force, 5, ftype="fir"),
+                   channels={"a1": decimate(good.channels["a1"], 5, ftype="fir")},
+                   fs=good.fs / 5)
+    study = two_dof_study()
+    m = prepare(load(csv(tmp_path, slow, "slow.csv", level=1.0)), study)
+    with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
+        res = Residuals(study, [m], runner, study.calibration_space(["k1"]))
+        _, comps = res.nominal()
+    centres = [f for b in res.entries.bands for f in b]
+    assert centres and max(centres) < 1562.5
+    w = res.weighted(comps)
+    # the record's own model: chi2 / n ~ 1 for a correct model; 4 allows the resampling's
+    # round trip near the band's top
+    assert float(np.mean(w**2)) < 4.0
