@@ -152,6 +152,25 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
                            line_noise=np.interp(f, fn, line_noise))
 
 
+def _bands_of(m, band: tuple[float, float], study_fs: float,
+              error_band: tuple[float, float] | None
+              ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """A record's comparison band (the study's, cut to a slow record's own,
+    :func:`~sensfw.measure.checks.recorded_band`) and its error band (``error_band`` or the
+    study's, cut likewise); an error naming the record where the error band holds none of
+    its lines."""
+    from ..errors import SensfwError
+
+    own = band if m.frf is not None else recorded_band(m, band, study_fs)
+    err = error_band or band
+    err = (err[0], min(err[1], own[1]))
+    if err[0] >= err[1]:
+        raise SensfwError(f"{m.file}: the error band {err[0]:g}-{(error_band or band)[1]:g}"
+                          f" Hz holds no line of the record (up to {own[1]:.4g} Hz) "
+                          f"inside the study's band {band[0]:g}-{band[1]:g} Hz")
+    return own, err
+
+
 def compare_measurements(study, measurements, runner, values=None, effects=(),
                          error_band: tuple[float, float] | None = None) -> Comparison:
     """Simulate the study's model (with extra ``effects`` and parameter ``values``) for
@@ -169,6 +188,7 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
 
     ex = study.excitation
     band = (ex.f0, ex.f1)
+    bands = [_bands_of(m, band, ex.fs, error_band) for m in measurements]  # before any run
     for attempt in range(LONGER + 1):
         specs = [variant_spec(study, dict(values or {}), m.drive, effects)
                  for m in measurements]
@@ -179,13 +199,7 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
             if sig is None:
                 raise SensfwError(f"the model failed for {m.file} (level {m.level:g} "
                                   f"{m.input_unit}); its error is in the run store")
-            own = band if m.frf is not None else recorded_band(m, band, ex.fs)
-            err = error_band or band
-            err = (err[0], min(err[1], own[1]))
-            if err[0] >= err[1]:
-                raise SensfwError(f"{m.file}: the error band {err[0]:g}-{(error_band or band)[1]:g}"
-                                  f" Hz holds no line of the record (up to {own[1]:.4g} Hz) "
-                                  f"inside the study's band {band[0]:g}-{band[1]:g} Hz")
+            own, err = bands[i]
             c = compare_level(m.signals, sig, study.output, own, m.level, m.file,
                               error_band=err)
             if m.sweep is not None and c.kind == "sweep":

@@ -346,3 +346,20 @@ def test_a_slow_record_is_calibrated_on_its_own_band_as_compare_compares_it(tmp_
     # the record's own model: chi2 / n ~ 1 for a correct model; 4 allows the resampling's
     # round trip near the band's top
     assert float(np.mean(w**2)) < 4.0
+
+
+def test_an_error_band_with_no_line_of_the_record_is_refused_before_any_run(tmp_path, good):
+    """``--error-band 6000,8000`` on a study swept to 2 kHz: an error naming the record
+    and the band, raised before the model runs (the store stays empty)."""
+    from sensfw.errors import SensfwError
+    from sensfw.measure.compare import compare_measurements
+    from sensfw.runs import Runner, RunStore
+
+    study = two_dof_study()
+    m = prepare(load(csv(tmp_path, good, "m.csv", level=1.0)), study)
+    store = RunStore(tmp_path / "runs")
+    with Runner(store, backend="serial") as runner, \
+            pytest.raises(SensfwError, match=r"m.csv: the error band 6000-8000 Hz holds no line"):
+        compare_measurements(study, [m], runner, error_band=(6000.0, 8000.0))
+    assert not list((tmp_path / "runs").rglob("*.npz")) and not list(
+        (tmp_path / "runs").rglob("*.json"))
