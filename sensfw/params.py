@@ -241,6 +241,12 @@ class DesignSpace:
             chosen = [variables[s] for s in select]
         else:
             chosen = list(variables.values())
+        frozen = [v.name for v in chosen if all(lo == hi for lo, _, hi in v.bounds.values())]
+        if frozen:
+            raise ParameterError(
+                f"design variable(s) {frozen} have min = max: they cannot vary (a design "
+                "would code them to 0 and find no effect); widen their bounds or leave them "
+                "out of the stage's variables")
         return cls(chosen, params, fixed)
 
     @property

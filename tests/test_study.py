@@ -348,3 +348,16 @@ def test_a_budget_below_one_is_refused_naming_the_option(cli, command):
     proc = cli(command, "studies/bert.toml", "-m", "nowhere.csv", *extra, "--budget", 0)
     assert proc.returncode != 0
     assert "--budget" in proc.stderr and "greater than or equal to 1" in proc.stderr
+
+
+def test_a_design_variable_that_cannot_vary_is_refused():
+    """min = max on a stage's variable: a design would code it to 0 and rank it last, as if
+    it had been screened and found to do nothing."""
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["bounds"] = {"slide_damping": {"min": "10 N*s/mm", "max": "10 N*s/mm",
+                                                     "nominal": "10 N*s/mm"}}
+    assert "['slide_damping'] have min = max: they cannot vary" in problems(data)[
+        "stages[0].design"]
+    data["stages"][0]["variables"] = ["slide_stiffness", "spring_damping"]
+    assert Study.from_dict(data, "x.toml").stages[0].variables == ["slide_stiffness",
+                                                                   "spring_damping"]
