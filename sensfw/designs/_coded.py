@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from ..params import DesignSpace
-from .base import ScreeningResult
+from .base import ScreeningResult, relative
 
 
 def to_table(space: DesignSpace, coded: np.ndarray, prefix: str) -> pd.DataFrame:
@@ -45,7 +45,7 @@ def linear_importance(space: DesignSpace, table: pd.DataFrame, y: np.ndarray,
         tab = tab.drop(columns="quadratic")
     imp = pd.Series(np.abs(lin) + np.abs(quad), index=space.names)
     notes = [] if ok.all() else [f"{(~ok).sum()} failed runs left out of the fit"]
-    return imp / imp.max() if imp.max() > 0 else imp, tab, notes
+    return relative(imp, y, notes), tab, notes
 
 
 def two_level_effects(space: DesignSpace, table: pd.DataFrame, y: np.ndarray,
@@ -71,6 +71,5 @@ def two_level_effects(space: DesignSpace, table: pd.DataFrame, y: np.ndarray,
     if center.any():
         curv = y[center].mean() - y[ok & corner].mean()
         notes.append(f"centre runs minus corner mean: {curv:.4g} (curvature check)")
-    imp = tab["effect"].abs()
-    imp = imp / imp.max() if imp.max() > 0 else imp
-    return ScreeningResult(importance=imp.fillna(0.0), table=tab, notes=notes)
+    imp = relative(tab["effect"].abs(), y, notes)
+    return ScreeningResult(importance=imp, table=tab, notes=notes)

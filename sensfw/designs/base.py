@@ -95,3 +95,26 @@ def responses(table: pd.DataFrame, y, design: str) -> np.ndarray:
     if len(y) != len(table):
         raise AnalysisError(f"{design}: {len(y)} responses for {len(table)} runs")
     return y
+
+
+#: an effect at most this fraction of the responses' own scale (their largest magnitude)
+#: is round-off, not an effect: ``1 + 1e-16 - 1`` normalised to the largest effect made a
+#: variable that does nothing 100 % important
+ROUND_OFF = 1e-9
+
+
+def relative(effects: pd.Series, y: np.ndarray, notes: list[str] | None = None,
+             by: str = "max") -> pd.Series:
+    """``effects`` (non-negative) over their largest (``by="max"``) or their sum
+    (``"sum"``); all zero, with a line in ``notes``, where the largest is round-off of the
+    responses ``y`` (:data:`ROUND_OFF`)."""
+    effects = effects.fillna(0.0)
+    top = float(effects.max()) if len(effects) else 0.0
+    finite = np.asarray(y, float)[np.isfinite(np.asarray(y, float))]
+    scale = float(np.max(np.abs(finite))) if finite.size else 0.0
+    if top <= ROUND_OFF * scale or top <= 0:
+        if notes is not None and len(effects):
+            notes.append(f"no variable changes the response beyond round-off (largest effect "
+                         f"{top:.3g}, responses up to {scale:.3g}): every importance is 0")
+        return effects * 0.0
+    return effects / (top if by == "max" else float(effects.sum()))

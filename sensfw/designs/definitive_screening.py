@@ -25,7 +25,7 @@ from scipy import stats
 from ..options import Float, Int, PluginOptions
 from ..plugins import designs
 from ._coded import to_table
-from .base import Design, DesignError, ScreeningResult, responses
+from .base import Design, DesignError, ScreeningResult, relative, responses
 
 
 def _is_prime(n: int) -> bool:
@@ -130,7 +130,7 @@ class DefinitiveScreening(Design):
         coef, se, dof = fit(quads)
         main = coef[1:k + 1]
         if se is not None and dof > 0:
-            with np.errstate(divide="ignore"):
+            with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0: a constant response
                 p_main = 2 * stats.t.sf(np.abs(main / se[1:k + 1]), dof)
         else:
             p_main = np.full(k, np.nan)
@@ -152,6 +152,5 @@ class DefinitiveScreening(Design):
                          ", ".join(space.names[j] for j in quads))
         if not ok.all():
             notes.append(f"{(~ok).sum()} failed runs left out; orthogonality is lost")
-        imp = tab["main_effect"].abs()
-        return ScreeningResult(importance=imp / imp.max() if imp.max() > 0 else imp,
-                               table=tab, notes=notes)
+        imp = relative(tab["main_effect"].abs(), y, notes)
+        return ScreeningResult(importance=imp, table=tab, notes=notes)

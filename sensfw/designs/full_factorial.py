@@ -12,7 +12,7 @@ from pydantic import Field, model_validator
 from ..options import Int, PluginOptions
 from ..params import DesignSpace
 from ..plugins import designs
-from .base import Design, DesignError, ScreeningResult, responses
+from .base import Design, DesignError, ScreeningResult, relative, responses
 
 
 @designs.register("full_factorial")
@@ -84,7 +84,6 @@ class FullFactorial(Design):
             recs.append({"variable": v.name, "effect_range": float(means.max() - means.min()),
                          **{f"mean@{lvl:.4g}": m for lvl, m in means.items()}})
         tab = pd.DataFrame(recs).set_index("variable")
-        top = tab["effect_range"].max()
-        imp = tab["effect_range"] / top if top > 0 else tab["effect_range"] * 0
         notes = [] if ok.all() else [f"{(~ok).sum()} failed runs left out of the main effects"]
+        imp = relative(tab["effect_range"], y, notes)
         return ScreeningResult(importance=imp, table=tab, notes=notes)

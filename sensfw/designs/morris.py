@@ -13,7 +13,7 @@ from ..options import Bool, Float, Int, PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import to_table
-from .base import Design, DesignError, ScreeningResult, check_groups, responses
+from .base import Design, DesignError, ScreeningResult, check_groups, relative, responses
 
 
 @designs.register("morris")
@@ -101,6 +101,5 @@ class Morris(Design):
         tab = pd.DataFrame({"variable": names, "mu": res["mu"], "mu_star": res["mu_star"],
                             "sigma": res["sigma"], "mu_star_conf": res["mu_star_conf"]}) \
             .set_index("variable")
-        imp = tab["mu_star"] / tab["mu_star"].max() if tab["mu_star"].max() > 0 \
-            else tab["mu_star"]
+        imp = relative(tab["mu_star"], y[rows], notes)
         return ScreeningResult(importance=imp, table=tab, notes=notes)

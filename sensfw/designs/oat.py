@@ -12,7 +12,7 @@ from ..errors import AnalysisError
 from ..options import PluginOptions, Str
 from ..params import DesignSpace
 from ..plugins import designs
-from .base import Design, ScreeningResult, check_groups, responses
+from .base import Design, ScreeningResult, check_groups, relative, responses
 
 
 @designs.register("oat")
@@ -94,7 +94,5 @@ class OAT(Design):
             recs.append({"variable": name, "s_min": lo, "s_max": hi,
                          "sensitivity": comb[self.options["combine"]]})
         tab = pd.DataFrame(recs).set_index("variable")
-        total = tab["sensitivity"].max() if self.options["normalise"] == "max" \
-            else tab["sensitivity"].sum()
-        tab["normalised"] = tab["sensitivity"] / total if total > 0 else 0.0
+        tab["normalised"] = relative(tab["sensitivity"], y, notes, self.options["normalise"])
         return ScreeningResult(importance=tab["normalised"].copy(), table=tab, notes=notes)

@@ -212,3 +212,23 @@ def test_sobol_design_recovers_ishigami_indices():
     # Saltelli estimators with N = 1024: the bootstrap half-widths are ~0.03-0.06 here
     np.testing.assert_allclose(res.table["S1"], ref["S1"], atol=0.06)
     np.testing.assert_allclose(res.table["ST"], ref["ST"], atol=0.06)
+
+
+@pytest.mark.parametrize("name,options", [("plackett_burman", {}), ("oat", {}),
+                                          ("full_factorial", {"levels": 3}),
+                                          ("definitive_screening", {}),
+                                          ("morris", {"trajectories": 4})])
+def test_an_effect_of_round_off_is_no_effect(name, options):
+    """A response that no variable moves beyond round-off (100 + 1e-14 x1, in double
+    precision 100 +- a few ulp): every importance is 0 with a note, not the largest
+    round-off normalised to 100 % (a one-variable Plackett-Burman design made 2e-16
+    100 %). The same response with a real effect of x1 keeps it at 1."""
+    space = unit_space(3)
+    design = make_design(name, **options)
+    table = design.generate(space, seed=1)
+    x1 = table["x1"].to_numpy()
+    res = design.analyze(space, table, 100.0 + 1e-14 * x1)
+    assert (res.importance == 0).all()
+    assert any("round-off" in n for n in res.notes)
+    res = design.analyze(space, table, 100.0 + 1e-3 * x1)
+    assert res.importance["x1"] == pytest.approx(1.0) and res.ranking[0] == "x1"
