@@ -85,11 +85,11 @@ class RichProgress:
             console=console, disable=not enabled, transient=False)
         self._task = None
 
-    def start(self, label: str, total: int, cached: int) -> None:
+    def start(self, label: str, total: int, cached: int, failed: int = 0) -> None:
         if not self._progress.live.is_started:
             self._progress.start()
-        self._task = self._progress.add_task(label, total=total, completed=cached, failed=0,
-                                             cached=cached)
+        self._task = self._progress.add_task(label, total=total, completed=cached,
+                                             failed=failed, cached=cached)
 
     def advance(self, ok: bool) -> None:
         task = self._progress.tasks[self._task]

@@ -30,7 +30,9 @@ class RunCounts:
 class Progress:
     """Progress reporting interface (the CLI plugs in a rich progress bar)."""
 
-    def start(self, label: str, total: int, cached: int) -> None: ...
+    def start(self, label: str, total: int, cached: int, failed: int = 0) -> None:
+        """A batch of ``total`` runs, ``cached`` of them already stored, ``failed`` of
+        those failed (and not retried)."""
 
     def advance(self, ok: bool) -> None: ...
 
@@ -58,11 +60,12 @@ class Runner:
         unique: dict[str, RunSpec] = {}
         for s in specs:
             unique.setdefault(s.key(), s)
-        todo, status = [], {}
+        todo, status, stored_failed = [], {}, 0
         for key, spec in unique.items():
             rec = self.store.record(key)
             if rec is not None and (rec["status"] == "ok" or not self.retry_failed):
                 status[key] = rec["status"]
+                stored_failed += rec["status"] == "failed"
                 if key not in self._seen:
                     self.counts.cached += 1
                     self.counts.failed += rec["status"] == "failed"
@@ -72,7 +75,7 @@ class Runner:
             if key not in self._seen:
                 self._seen.add(key)
                 self.counts.total += 1
-        self.progress.start(label, len(unique), len(unique) - len(todo))
+        self.progress.start(label, len(unique), len(unique) - len(todo), stored_failed)
 
         def done(spec: RunSpec, result: RunResult) -> None:
             self.store.save(spec, result)

@@ -7,7 +7,7 @@ from sensfw_test_models import FAULT_INJECTION
 from sensfw.excitation import Chirp
 from sensfw.models.base import SolverSettings
 from sensfw.plugins import models
-from sensfw.runs import Runner, RunSpec, RunStore
+from sensfw.runs import Progress, Runner, RunSpec, RunStore
 from sensfw.runs.executor import run_processes
 
 EX = Chirp(50, 500, 0.05, 4000, 1.0)
@@ -50,6 +50,14 @@ def test_runner_caches_and_counts(tmp_path):
     r2 = Runner(store, backend="serial")
     r2.run(specs(points))
     assert r2.counts.as_dict() == {"total": 4, "new": 0, "cached": 4, "failed": 1}
+    class Seen(Progress):
+        def start(self, label, total, cached, failed=0):
+            self.batch = (total, cached, failed)
+
+    r4 = Runner(store, backend="serial", progress=Seen())
+    r4.run(specs(points))
+    # the bar's "failed" counts the stored failure it does not retry (it showed 0)
+    assert r4.progress.batch == (4, 4, 1)
     r3 = Runner(store, backend="serial", retry_failed=True)
     r3.run(specs(points))
     assert r3.counts.new == 1 and r3.counts.cached == 3
