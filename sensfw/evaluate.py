@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -64,7 +64,9 @@ def variant_spec(study: Study, values: Mapping[str, float], excitation: Excitati
     """The run of the study's model with extra ``effects`` (specs), every parameter at its
     nominal value but ``values`` (checked against their bounds), driven by ``excitation``.
     The worker rebuilds the model from the study's reference with the study's own effects
-    followed by ``effects``."""
+    followed by ``effects``. The study's ``solver.timeout`` is for a run of its own
+    excitation; a longer drive (an FRF-only record's stepped sine holds a dwell per line,
+    often minutes of signal) gets it in proportion to its length (:func:`run_timeout`)."""
     model = model_with_effects(study, effects) if effects else study.model
     params = study.parameters.nominal()
     declared = model.parameters()
@@ -77,7 +79,20 @@ def variant_spec(study: Study, values: Mapping[str, float], excitation: Excitati
         ref = {"name": ref["name"], "options": {
             **ref["options"], "effects": [*ref["options"].get("effects", []),
                                           *(dict(e) for e in effects)]}}
-    return RunSpec.create(model, params, excitation, study.solver, ref)
+    return RunSpec.create(model, params, excitation,
+                          replace(study.solver, timeout=run_timeout(study, excitation)), ref)
+
+
+def run_timeout(study: Study, excitation: Excitation) -> float | None:
+    """The study's ``solver.timeout`` for a run driven by ``excitation``: scaled by the
+    drive's length over the study's excitation's where the drive is longer (the timeout
+    guards against a run that stalls, and a run's cost grows with its length)."""
+    timeout = study.solver.timeout
+    own = study.excitation.n_samples / study.excitation.fs
+    length = excitation.n_samples / excitation.fs
+    if timeout is None or not own > 0 or length <= own:
+        return timeout
+    return timeout * length / own
 
 
 def simulate(runner, specs: Sequence[RunSpec], label: str = "runs"

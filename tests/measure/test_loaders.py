@@ -363,3 +363,22 @@ def test_an_error_band_with_no_line_of_the_record_is_refused_before_any_run(tmp_
         compare_measurements(study, [m], runner, error_band=(6000.0, 8000.0))
     assert not list((tmp_path / "runs").rglob("*.npz")) and not list(
         (tmp_path / "runs").rglob("*.json"))
+
+
+def test_a_drive_longer_than_the_studys_excitation_gets_a_longer_timeout():
+    """The study's solver.timeout is for its own 0.35 s excitation: an FRF-only record's
+    stepped sine of 50 lines x 0.2 s (10 s of signal, 28.6 times longer) gets 28.6 times
+    the timeout (the BERT beam's 161-line FRF.mat ran into the study's 300 s), a shorter
+    drive the study's own."""
+    from sensfw.evaluate import variant_spec
+    from sensfw.excitation import SteppedSine
+    from sensfw.study import Study
+
+    data = two_dof_study().spec.model_dump(mode="json", exclude_none=True)
+    data["solver"] = {**data.get("solver", {}), "timeout": "2 s"}
+    study = Study.from_dict(data)
+    long = SteppedSine.at(np.linspace(60.0, 1500.0, 50), 0.2, 20000.0, 1.0)
+    assert variant_spec(study, {}, long).timeout == pytest.approx(2.0 * 10.0 / 0.35)
+    short = SteppedSine.at([100.0, 200.0], 0.1, 20000.0, 1.0)
+    assert variant_spec(study, {}, short).timeout == 2.0
+    assert variant_spec(study, {}, long).key() == variant_spec(two_dof_study(), {}, long).key()
