@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 from typing import Annotated
@@ -71,8 +72,8 @@ def run(
             out.print(f"  {st.name}: selected {', '.join(st.selected)}")
         for label, per in st.validation.items():
             for name, v in per.items():
-                adj = "n/a" if v.get("r2_adj") is None else f"{v['r2_adj']:.3f}"
-                q2 = "n/a" if v.get("q2_loo") is None else f"{v['q2_loo']:.3f}"
+                adj, q2 = (f"{x:.3f}" if x is not None and math.isfinite(x) else "n/a"
+                           for x in (v.get("r2_adj"), v.get("q2_loo")))
                 out.print(f"  {st.name}: {label} / {name}: R2adj={adj} Q2(LOO)={q2}")
 
 

@@ -317,9 +317,18 @@ def _time_signals(result, stage) -> bool:
     return False
 
 
+def _num(value, fmt: str) -> str:
+    """``value`` formatted, or "n/a" where it is missing or not finite (a score that does
+    not vary has no R² and no F)."""
+    if value is None or not np.isfinite(float(value)):
+        return "n/a"
+    return format(float(value), fmt)
+
+
 def _coef_table(reg: dict) -> tuple[pd.DataFrame, pd.Series]:
     frame = pd.DataFrame(reg["coefficients"]).set_index("term")
-    sig = (frame["p"] < 0.05).fillna(False)
+    sig = (pd.to_numeric(frame["p"], errors="coerce") < 0.05).fillna(False)
+    frame = frame.astype(object).where(frame.notna(), "n/a")
     return frame, sig
 
 
@@ -384,8 +393,12 @@ def write_study_report(result, path: str | Path) -> Path:
                         "Fig. 7 analogue: FRFs (Hv) of the min (dashed) and max (solid) runs of "
                         "the most sensitive variables over the nominal reference.")
         if stage.selected is not None:
+            by = stage.spec.select.by or stage.spec.scorers[0].key
+            scorer = next((s for s in stage.spec.scorers if s.key == by), None)
+            what = "the FRF scalar" if scorer is not None and scorer.name == "frf_scalar" \
+                else f"the score {by}"
             page.figure(sensitivity_bars(stage, stage.spec.select.threshold),
-                        "Fig. 8 analogue: normalised sensitivity from the FRF scalar.")
+                        f"Fig. 8 analogue: normalised sensitivity from {what}.")
             page.p("Selected for the next stage: " + (", ".join(
                 f"{g} ({', '.join(groups[g])})" if g in groups else g
                 for g in stage.selected) or "none"), "ok")
@@ -401,9 +414,10 @@ def write_study_report(result, path: str | Path) -> Path:
             page.figure(actual_vs_predicted(stage),
                         "Fig. 10a analogue: simulated against predicted scores.")
             for label, reg in stage.regression.items():
-                page.h3(f"{label}: Eq. 18 ({reg['surrogate']}) R²={reg['r2']:.4f}, "
-                        f"R²adj={reg['r2_adj']:.4f}, Q²(LOO)={reg['q2']:.4f}, "
-                        f"F={reg['f_stat']:.4g} (p={reg['f_pvalue']:.3g}), n={reg['n_obs']}")
+                page.h3(f"{label}: Eq. 18 ({reg['surrogate']}) R²={_num(reg['r2'], '.4f')}, "
+                        f"R²adj={_num(reg['r2_adj'], '.4f')}, Q²(LOO)={_num(reg['q2'], '.4f')}, "
+                        f"F={_num(reg['f_stat'], '.4g')} (p={_num(reg['f_pvalue'], '.3g')}), "
+                        f"n={reg['n_obs']}")
                 frame, sig = _coef_table(reg)
                 page.table(frame, highlight=sig)
                 page.p("Highlighted: p < 0.05. Coefficients in physical units (Fig. 10b).",
@@ -413,7 +427,16 @@ def write_study_report(result, path: str | Path) -> Path:
                     page.p(f"{label}: no surrogate could be fitted to this score (the stage's "
                            "notes above say why).", "meta")
                     continue
-                page.h3(f"{label}: surrogates side by side (same {stage.table.shape[0]} runs)")
+                used = sorted({v.get("n_obs") for v in per.values()} - {None})
+                runs = f"same {used[0]} runs" if len(used) == 1 else \
+                    f"{', '.join(map(str, used))} runs"
+                failed = stage.table.shape[0] - max(used, default=stage.table.shape[0])
+                page.h3(f"{label}: surrogates side by side ({runs}"
+                        + (f"; {failed} of the stage's {stage.table.shape[0]} runs have no "
+                           "score" if failed > 0 else "") + ")")
+                for name, v in per.items():
+                    for n in v.get("notes") or ():
+                        page.note(f"{name}: {n}")
                 frame, dropped = drop_empty_columns(validation_table(per))
                 page.table(frame.astype(object).where(frame.notna(), "n/a"))
                 page.p("R²adj and Q² on the scale of the score; Q² from leave-one-out and "

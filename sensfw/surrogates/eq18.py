@@ -33,6 +33,30 @@ from ..plugins import surrogates
 from .base import BOUNDS, SurrogateBase, SurrogateError, feature_names, scaling
 
 
+def aliased_terms(A: np.ndarray, terms: list[str], rtol: float = 1e-8) -> list[str]:
+    """The columns of ``A`` that are linear combinations of the columns before them, each
+    as ``"term = combination"`` (empty where ``A`` has full column rank). statsmodels fits
+    such a matrix by its pseudo-inverse without an error: it splits the one estimable
+    effect equally between the aliased terms and reports each as significant."""
+    out, kept = [], []
+    for j in range(A.shape[1]):
+        col = A[:, j]
+        norm = float(np.linalg.norm(col))
+        if kept:
+            B = A[:, kept]
+            c, *_ = np.linalg.lstsq(B, col, rcond=None)
+            if norm == 0 or np.linalg.norm(col - B @ c) <= rtol * norm:
+                parts = [f"{v:+.3g} {terms[k]}" for v, k in zip(c, kept, strict=True)
+                         if abs(v) > 1e-6 * max(np.abs(c).max(), 1e-300)]
+                out.append(f"{terms[j]} = {' '.join(parts).lstrip('+')}")
+                continue
+        elif norm == 0:
+            out.append(f"{terms[j]} = 0")
+            continue
+        kept.append(j)
+    return out
+
+
 def design_matrix(X: np.ndarray, names: list[str], interaction: str = "product"):
     """Columns of Eq. 18 and their term names (intercept first)."""
     cols, terms = [np.ones(len(X))], ["(Intercept)"]
@@ -178,6 +202,13 @@ class Eq18(SurrogateBase):
             raise SurrogateError(f"Eq18: {len(y)} runs (n_samples = {len(y)}) cannot support "
                                  f"{A.shape[1]} "
                                  f"coefficients (1 + 2m + m(m-1)/2 for m = {X.shape[1]})")
+        aliased = aliased_terms(A, terms)
+        if aliased:
+            raise SurrogateError(
+                "Eq18: the runs cannot tell apart " + "; ".join(aliased) + " (a term the "
+                "design does not vary independently: a square on two levels, a variable "
+                "left at two levels by failed runs); Eq. 18 needs three levels of every "
+                "variable: a 3-level or response-surface design, or another surrogate")
         res = sm.OLS(y, A).fit()
         self.result_ = res
         self.terms_ = terms
@@ -198,7 +229,9 @@ class Eq18(SurrogateBase):
         h = res.get_influence().hat_matrix_diag
         e = res.resid
         ss_tot = float(np.sum((y - y.mean()) ** 2))
-        press = float(np.sum((e / (1 - h)) ** 2)) if np.all(h < 1 - 1e-12) else np.inf
+        # a run of leverage 1 (a lone centre point of a saturated design) is fitted exactly
+        # whatever its value: its left-out prediction, and so PRESS, is undefined
+        press = float(np.sum((e / (1 - h)) ** 2)) if np.all(h < 1 - 1e-9) else np.nan
         self.summary_ = {
             "r2": float(res.rsquared), "r2_adj": float(res.rsquared_adj),
             "f_stat": float(res.fvalue), "f_pvalue": float(res.f_pvalue),

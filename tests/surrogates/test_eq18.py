@@ -62,3 +62,44 @@ def test_ratio_form_and_log_options():
     assert np.all(lg.predict(X) > 0)
     with pytest.raises(SurrogateError, match="cannot support"):
         make_surrogate("eq18").fit(X.iloc[:8], Y[:8])
+
+
+def test_terms_the_runs_cannot_tell_apart_are_named_not_split():
+    """A 2^5 full factorial: every square is the intercept column. statsmodels' pseudo-
+    inverse split the intercept equally over the six (each 'significant', p 4e-18); the fit
+    is refused naming the aliases. On a 3^3 grid the same response fits (full rank)."""
+    X = pd.DataFrame(list(itertools.product([-1.0, 1.0], repeat=5)), columns=list("abcde"))
+    y = X["a"] + 0.1 * X["b"] * X["c"]
+    with pytest.raises(SurrogateError, match=r"a\^2 = 1 \(Intercept\); b\^2 = 1 \(Intercept\)"):
+        make_surrogate("eq18").fit(X, y)
+    X3 = pd.DataFrame(list(itertools.product([-1.0, 0.0, 1.0], repeat=3)), columns=list("abc"))
+    est = make_surrogate("eq18").fit(X3, X3["a"] ** 2)
+    assert est.summary_["r2"] == pytest.approx(1.0)
+
+
+def test_a_validation_refit_that_cannot_be_fitted_leaves_that_number_out():
+    """Box-Behnken on 3 variables: 13 runs for Eq. 18's 10 terms fit, but the 5-fold
+    refits on 10-11 runs cannot (10 runs for 10 terms): Q² k-fold is None with the reason,
+    the rest of the validation stands (it stopped the study after every run)."""
+    from sensfw.analysis.validation import validate
+
+    pts = []
+    for i, j in [(0, 1), (0, 2), (1, 2)]:
+        for a in (-1, 1):
+            for b in (-1, 1):
+                p = [0.0, 0.0, 0.0]
+                p[i], p[j] = a, b
+                pts.append(p)
+    X = pd.DataFrame([*pts, [0.0, 0.0, 0.0]], columns=["x1", "x2", "x3"])
+    rng = np.random.default_rng(0)
+    y = 1 + X.x1 - 2 * X.x2 + 1.5 * X.x1**2 + 0.5 * X.x1 * X.x3 + 0.2 * rng.standard_normal(13)
+    est = make_surrogate("eq18").fit(X, y)
+    v = validate(est, X, y)
+    assert v["q2_kfold"] is None
+    # its lone centre run has leverage 1: PRESS is undefined (it printed Q2(LOO)=-inf)
+    assert v["q2_loo"] is None and any("leverage 1" in n for n in v["notes"])
+    assert v["r2_adj"] == pytest.approx(est.summary_["r2_adj"])
+    assert any(n.startswith("Q² 5-fold: a refit on 10-11 of the 13 runs cannot be fitted")
+               for n in v["notes"])
+    const = validate(make_surrogate("polynomial").fit(X, np.ones(13)), X, np.ones(13))
+    assert any("does not vary" in n for n in const["notes"])
