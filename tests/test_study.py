@@ -361,3 +361,32 @@ def test_a_design_variable_that_cannot_vary_is_refused():
     data["stages"][0]["variables"] = ["slide_stiffness", "spring_damping"]
     assert Study.from_dict(data, "x.toml").stages[0].variables == ["slide_stiffness",
                                                                    "spring_damping"]
+
+
+@pytest.mark.parametrize("stage,scorer,path,message", [
+    (1, {"name": "order_amplitude", "order": 6}, "stages[1].scorers[0].order",
+     "order 6 is above the highest unaliased order 5"),
+    (0, {"name": "frf_scalar", "band": [100.0, 2000.0], "nperseg": 100000},
+     "stages[0].scorers[0].nperseg", "nperseg 100000 is longer than the record"),
+    (0, {"name": "frf_db_rms", "band": [100.5, 101.5]}, "stages[0].scorers[0].band",
+     "holds no line of the FRF, whose lines are 2.5 Hz apart"),
+])
+def test_scorer_options_that_the_excitation_cannot_serve_are_refused_at_validation(
+        stage, scorer, path, message):
+    """Each passed validation and failed after every run of the study (or gave NaN scores
+    and blamed the nominal run). The 2-DOF study: 20 kHz, swept to 2 kHz, 0.4 s (2.5 Hz
+    lines): order 5 is the highest below Nyquist."""
+    data = {"study": {"name": "t"}, "model": {"name": "two_dof", "output": "a1"},
+            "excitation": {"f0": "50 Hz", "f1": "2 kHz", "duration": "0.3 s", "fs": "20 kHz",
+                           "amplitude": "1 N", "tail": "0.1 s"},
+            "stages": [{"name": "s", "design": "oat", "select": {"threshold": 0.1},
+                        "scorers": [{"name": "frf_scalar", "band": [60.0, 1900.0]}]},
+                       {"name": "d", "design": "full_factorial", "variables": "selected:s",
+                        "scorers": [{"name": "thd"}]}]}
+    Study.from_dict(copy.deepcopy(data), "x.toml")  # valid as it is
+    data["stages"][stage]["scorers"] = [scorer]
+    assert message in problems(data)[path]
+    data["excitation"]["f1"] = "6 kHz"  # THD: the second harmonic of 6 kHz is above 10 kHz
+    data["stages"][0]["scorers"] = [{"name": "frf_scalar", "band": [60.0, 1900.0]}]
+    data["stages"][1]["scorers"] = [{"name": "thd"}]
+    assert "lies above the Nyquist frequency 10000 Hz" in problems(data)["stages[1].scorers[0]"]

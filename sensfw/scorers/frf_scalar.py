@@ -36,10 +36,24 @@ class _FRFScorer(Scorer):
     def check_excitation(self, excitation) -> None:
         """A band the study sets must lie below the Nyquist frequency and inside the
         excitation's sweep f0..f1 (outside it the FRF is the ratio of noise to nothing). The
-        default band (the paper's 50 Hz..5 kHz) is cut to the record's frequencies."""
+        default band (the paper's 50 Hz..5 kHz) is cut to the record's frequencies. Welch's
+        ``nperseg`` must fit in the record, and the band must hold a line of the FRF (its
+        resolution is fs / nperseg, or 1 / the record's length)."""
+        n = excitation.n_samples
+        nperseg = self.options["nperseg"]
+        if nperseg is not None and nperseg > n:
+            raise ScorerError(f"scorer {self.name!r}: nperseg {nperseg} is longer than the "
+                              f"record ({n} samples: {n / excitation.fs:g} s at "
+                              f"{excitation.fs:g} Hz)", option="nperseg")
+        lo, hi = (float(b) for b in self.options["band"])
+        df = excitation.fs / (nperseg or n)
+        top = min(hi, excitation.fs / 2)
+        if np.ceil(lo / df - 1e-9) * df > top + 1e-9 * df:
+            raise ScorerError(f"scorer {self.name!r}: band [{lo:g}, {hi:g}] Hz holds no line "
+                              f"of the FRF, whose lines are {df:.4g} Hz apart (fs / "
+                              f"{nperseg or n} samples)", option="band")
         if "band" not in self.given:
             return
-        lo, hi = (float(b) for b in self.options["band"])
         nyquist = excitation.fs / 2
         if hi > nyquist:
             raise ScorerError(f"scorer {self.name!r}: band [{lo:g}, {hi:g}] Hz reaches above "

@@ -5,12 +5,26 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
+import numpy as np
 from pydantic import Field
 
 from ..options import Bool, Int, PluginOptions
 from ..plugins import scorers
 from ..signal import harmonic_amplitudes, thd
 from .base import Scorer, ScorerError
+
+
+def _top_order(scorer, excitation) -> tuple[int, float]:
+    """The highest order of the excitation's order spectrum, ``fs / (2 max f_inst)``
+    (:func:`~sensfw.signal.orders.harmonic_amplitudes`), checked before anything runs: an
+    order scorer needs a sweep or stepped sine."""
+    f = excitation.f_inst()
+    if f is None:
+        raise ScorerError(f"scorer {scorer.name!r} analyses orders of a sweep or stepped "
+                          f"sine; the excitation is {excitation.kind}")
+    fmax = float(np.max(np.asarray(f, float)[: max(1, round(excitation.sweep_end *
+                                                          excitation.fs))]))
+    return int(np.floor(excitation.fs / (2 * fmax) + 1e-9)), fmax
 
 
 def _f_inst(scorer, signals):
@@ -34,6 +48,14 @@ class THD(Scorer):
         unit: Literal["percent", "dBc"] = Field("percent", description="'percent' or 'dBc'")
         detrend: Bool = Field(False, description="true or false")
 
+    def check_excitation(self, excitation) -> None:
+        """Its second harmonic must lie below the Nyquist frequency at the sweep's top."""
+        top, fmax = _top_order(self, excitation)
+        if top < 2:
+            raise ScorerError(f"scorer {self.name!r}: the second harmonic of the excitation's "
+                              f"{fmax:g} Hz lies above the Nyquist frequency "
+                              f"{excitation.fs / 2:g} Hz (THD needs fs >= 4 x {fmax:g} Hz)")
+
     def score(self, signals, reference=None):
         o = self.options
         signals = signals.sweep()
@@ -51,6 +73,15 @@ class OrderAmplitude(Scorer):
     class Options(PluginOptions):
         order: Annotated[Int, Field(ge=1)] = Field(1, description="an integer >= 1")
         detrend: Bool = Field(False, description="true or false")
+
+    def check_excitation(self, excitation) -> None:
+        """The order must lie below the Nyquist frequency at the sweep's top."""
+        top, fmax = _top_order(self, excitation)
+        if self.options["order"] > top:
+            raise ScorerError(f"scorer {self.name!r}: order {self.options['order']} is above "
+                              f"the highest unaliased order {top} of the excitation (fs / (2 "
+                              f"f_max) = {excitation.fs:g} / (2 x {fmax:g}) Hz)",
+                              option="order")
 
     def score(self, signals, reference=None):
         n = self.options["order"]
