@@ -206,8 +206,9 @@ def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: 
         (``study.toml``) before anything runs, then ``results.json``, ``timing.json`` and,
         with ``report``, ``report.html`` (:func:`write_result`).
     known : dict, optional
-        Scores by run key from an earlier ``results.json``
-        (:func:`~sensfw.evaluate.score_runs`).
+        Scores by stage name, then run key, from an earlier ``results.json``
+        (:func:`~sensfw.evaluate.score_runs`): per stage, since two stages may give a
+        shared run different scores under one label (``rms`` of another channel).
     validated : dict, optional
         Surrogate validation by stage name from an earlier ``results.json``
         (:func:`fit_surrogates`).
@@ -231,7 +232,7 @@ def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: 
         stages = []
         for stage in study.stages:
             log(f"stage {stage.name}: design {stage.design}")
-            res = run_stage(study, stage, runner, done, known,
+            res = run_stage(study, stage, runner, done, (known or {}).get(stage.name),
                             (validated or {}).get(stage.name))
             done[stage.name] = res
             stages.append(res)
@@ -268,10 +269,11 @@ def load_result(out_dir: str | Path) -> StudyResult:
     if not study_file.exists():
         study_file = Path(data.get("study_file") or study_file)
     study = Study.load(study_file)
-    known: dict[str, dict] = {}
-    for st in stages:  # a run two stages share has the scores of both
+    known: dict[str, dict[str, dict]] = {}
+    for st in stages:  # each stage's own scores: a run two stages share has both
+        own = known.setdefault(st["name"], {})
         for r in st.get("runs", []):
-            known.setdefault(r["key"], {}).update(
+            own.setdefault(r["key"], {}).update(
                 {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
                  if r["label"] in v})
     validated = {st["name"]: st["validation"] for st in stages if "validation" in st}

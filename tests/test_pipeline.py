@@ -227,6 +227,37 @@ def test_a_rebuild_keeps_the_scores_of_every_stage_a_run_belongs_to(tmp_path):
     assert again.stages[0].selected == ["x1", "x2"]
 
 
+def test_a_rebuild_keeps_each_stages_scores_of_a_shared_run_under_one_label(tmp_path):
+    """The screen scores ``rms`` of a1, the DoE ``rms`` of a2, both labelled "rms"; the
+    DoE's centre and axis runs are the screen's. A rebuild merged the two stages' scores by
+    run key, so the screen read the DoE's a2 values, selected other variables and asked
+    for DoE runs that never existed."""
+    from sensfw.pipeline import load_result, results_json, run_study
+    from sensfw.study import Study
+
+    spec = {"study": {"name": "same", "seed": 1},
+            "model": {"name": "two_dof", "output": "a1"},
+            "excitation": {"f0": "50 Hz", "f1": "2 kHz", "duration": "0.3 s", "fs": "20 kHz",
+                           "amplitude": "1 N", "tail": "0.1 s"},
+            "execution": {"backend": "serial"},
+            "stages": [{"name": "screen", "design": "oat", "scorers": [{"name": "rms"}],
+                        "select": {"threshold": 0.1, "max_variables": 2}},
+                       {"name": "doe", "design": "full_factorial",
+                        "design_options": {"levels": 3, "centre": "nominal"},
+                        "variables": "selected:screen",
+                        "scorers": [{"name": "rms", "channel": "a2"}],
+                        "surrogates": ["eq18"]}]}
+    result = run_study(Study.from_dict(spec), out=tmp_path, report=False)
+    assert set(result.stages[0].keys) & set(result.stages[1].keys)  # runs are shared
+    again = load_result(tmp_path)
+
+    def same(r):
+        return json.loads(json.dumps(results_json(r)))["stages"]
+
+    assert same(again) == same(result)
+    assert again.stages[0].selected == result.stages[0].selected
+
+
 def test_a_group_screen_passes_the_members_of_its_selected_groups_on(tmp_path):
     """A screen by groups (``oat`` with ``groups``) selects groups; the next stage's
     ``selected:screen`` takes their members. y = 1 + x1 - 2 x2 + 1.5 x1^2 + 0.5 x1 x3: x1 and
