@@ -390,3 +390,14 @@ def test_scorer_options_that_the_excitation_cannot_serve_are_refused_at_validati
     data["stages"][0]["scorers"] = [{"name": "frf_scalar", "band": [60.0, 1900.0]}]
     data["stages"][1]["scorers"] = [{"name": "thd"}]
     assert "lies above the Nyquist frequency 10000 Hz" in problems(data)["stages[1].scorers[0]"]
+
+
+def test_a_threshold_that_selects_nothing_is_refused():
+    """Importance is normalised to at most 1 and selection is strictly above the
+    threshold: 1.0 passed validation, selected nothing and stopped the next stage."""
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["select"]["threshold"] = 1.0
+    assert problems(data)["stages[0].select.threshold"].startswith(
+        "1 selects nothing: importance is normalised to at most 1")
+    data["stages"][0]["select"]["threshold"] = 0.99
+    Study.from_dict(data, "x.toml")

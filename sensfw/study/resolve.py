@@ -79,7 +79,9 @@ class Study:
         try:
             spec = StudyFile.model_validate(data)
         except ValidationError as err:
-            problems = [(_path(e["loc"]), e["msg"]) for e in err.errors()]
+            # a validator's own message without pydantic's "Value error, " in front
+            problems = [(_path(e["loc"]), e["msg"].removeprefix("Value error, "))
+                        for e in err.errors()]
             # unknown keys alone should not hide the other problems: drop them and check
             # the rest, so that everything is reported at once
             if all(e["type"] == "extra_forbidden" for e in err.errors()):

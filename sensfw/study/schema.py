@@ -123,6 +123,15 @@ class SelectSpec(_Strict):
     threshold: float = Field(default=0.10, ge=0.0)
     max_variables: int | None = Field(default=None, ge=1)
 
+    @field_validator("threshold")
+    @classmethod
+    def _below_one(cls, v: float) -> float:
+        if v >= 1.0:
+            raise ValueError(f"{v:g} selects nothing: importance is normalised to at most 1 "
+                             "(the most important variable) and a variable is selected "
+                             "above the threshold; use a value in [0, 1)")
+        return v
+
 
 class StageSpec(_Strict):
     name: str
