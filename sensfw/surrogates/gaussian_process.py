@@ -83,7 +83,12 @@ class GaussianProcess(SurrogateBase):
         elif self.log_features is None:
             self.log_mask_ = np.zeros(X.shape[1], bool)
         else:
-            self.log_mask_ = np.array([n in self.log_features for n in feature_names(self)])
+            names = feature_names(self)
+            unknown = sorted(set(self.log_features) - set(names))
+            if unknown:  # a typo turned the transform off without a word
+                raise SurrogateError(f"GaussianProcess: log_features {unknown} are not "
+                                     f"features ({', '.join(names)})", option="log_features")
+            self.log_mask_ = np.array([n in self.log_features for n in names])
         X = self._transform(X)
         if b is not None:
             b = np.where(self.log_mask_[:, None], np.log10(np.maximum(b, 1e-300)), b)

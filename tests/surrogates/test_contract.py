@@ -99,3 +99,17 @@ def test_auto_passes_on_the_absence_of_members_too():
     assert auto.summary_ is None and auto.coefficient_table_ is None
     assert auto.loo_method is None and auto.loo_predict() is None
     assert auto.predict_interval(X) is None
+
+
+@pytest.mark.parametrize("name", ["eq18", "gaussian_process"])
+def test_a_log_feature_that_is_no_feature_is_an_error(name):
+    """``log_features=["K1"]`` for a feature ``k1``: the Gaussian process fitted without
+    any log transform and said nothing (Eq. 18 refused it)."""
+    from sensfw.surrogates import SurrogateError, make_surrogate
+
+    rng = np.random.default_rng(0)
+    X = pd.DataFrame({"k1": rng.uniform(1, 100, 20), "c1": rng.uniform(0, 1, 20)})
+    with pytest.raises(SurrogateError, match=r"log_features \['K1'\] are not features"):
+        make_surrogate(name, log_features=["K1"]).fit(X, X["k1"] + X["c1"])
+    est = make_surrogate(name, log_features=["k1"]).fit(X, np.log10(X["k1"]) + X["c1"])
+    assert list(est.log_mask_) == [True, False]
