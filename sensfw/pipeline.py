@@ -89,6 +89,11 @@ def fit_surrogates(study: Study, stage: StageSpec, space: DesignSpace, table: pd
         if ok.sum() < 3:
             result.notes.append(f"{label}: only {ok.sum()} finished runs, no surrogate fitted")
             continue
+        if np.ptp(y[ok]) <= 1e-12 * max(np.max(np.abs(y[ok])), 1e-300):
+            result.notes.append(f"{label}: the score does not vary over the {ok.sum()} "
+                                f"finished runs (every one {y[ok][0]:.6g}): no surrogate "
+                                "fitted, nothing depends on the variables")
+            continue
         result.surrogates[label] = {}
         result.validation[label] = {}
         for sur in stage.surrogates:

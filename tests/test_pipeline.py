@@ -299,3 +299,27 @@ def test_a_rebuild_takes_the_stored_validation_of_the_same_fit(tmp_path, monkeyp
     (tmp_path / "results.json").write_text(json.dumps(written))
     with pytest.raises(AssertionError, match="validated again"):
         load_result(tmp_path)
+
+
+def test_a_score_that_does_not_vary_gets_one_line_not_surrogates(tmp_path):
+    """Ishigami with x1 = x2 = 0 is x3 times sin(0) = 0 whatever x3: the report showed five
+    surrogates of a constant with R²adj=nan, t and p 'None', and Q² k-fold 'left out, too
+    few runs'. Now no surrogate is fitted and one note says why."""
+    from sensfw.pipeline import run_study
+    from sensfw.study import Study
+
+    spec = {"study": {"name": "const", "seed": 1}, "model": {"name": "ishigami"},
+            "execution": {"backend": "serial"},
+            "stages": [{"name": "doe", "design": "full_factorial",
+                        "design_options": {"levels": 5}, "variables": ["x3"],
+                        "scorers": [{"name": "value", "label": "y"}],
+                        "surrogates": ["eq18", "gaussian_process"]}]}
+    st = run_study(Study.from_dict(spec), out=tmp_path).stages[0]
+    assert not st.surrogates.get("y") and not st.regression
+    assert "y: the score does not vary over the 5 finished runs (every one 0)" in " ".join(
+        st.notes)
+    import re
+
+    html = re.sub(r'src="data:image/png;base64,[^"]*"', "", (tmp_path / "report.html")
+                  .read_text())
+    assert "does not vary" in html and "nan" not in html.lower()
