@@ -9,6 +9,7 @@ orders them; the figures share the stage's tables and a split would only scatter
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -209,13 +210,17 @@ EMPTY_COLUMN_REASON = {
 }
 
 
-def drop_empty_columns(frame: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+def drop_empty_columns(frame: pd.DataFrame, noted: Sequence[str] = ()
+                       ) -> tuple[pd.DataFrame, list[str]]:
     """``frame`` without the columns that are NaN in every row, and one line per dropped
-    column saying why (:data:`EMPTY_COLUMN_REASON`)."""
+    column saying why (:data:`EMPTY_COLUMN_REASON`, or the validation's notes for the
+    columns in ``noted``)."""
     empty = [c for c in frame.columns if frame[c].isna().all()]
     by_reason: dict[str, list[str]] = {}
     for c in empty:
-        by_reason.setdefault(EMPTY_COLUMN_REASON.get(c, "nothing to show"), []).append(c)
+        why = "the notes above say why" if c in noted else \
+            EMPTY_COLUMN_REASON.get(c, "nothing to show")
+        by_reason.setdefault(why, []).append(c)
     why = [f"{' and '.join(cols)}: left out, {reason}." for reason, cols in by_reason.items()]
     return frame.drop(columns=empty), why
 
@@ -434,10 +439,13 @@ def write_study_report(result, path: str | Path) -> Path:
                 page.h3(f"{label}: surrogates side by side ({runs}"
                         + (f"; {failed} of the stage's {stage.table.shape[0]} runs have no "
                            "score" if failed > 0 else "") + ")")
+                noted = set()
                 for name, v in per.items():
                     for n in v.get("notes") or ():
                         page.note(f"{name}: {n}")
-                frame, dropped = drop_empty_columns(validation_table(per))
+                        noted |= {"Q² LOO"} if n.startswith("Q² LOO") else \
+                            {"Q² k-fold"} if n.startswith("Q² ") else set()
+                frame, dropped = drop_empty_columns(validation_table(per), sorted(noted))
                 page.table(frame.astype(object).where(frame.notna(), "n/a"))
                 page.p("R²adj and Q² on the scale of the score; Q² from leave-one-out and "
                        "5-fold refits; confirmation = new runs inside the bounds; n/a: the "
