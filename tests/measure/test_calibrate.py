@@ -295,3 +295,30 @@ def test_the_surrogates_numpy_predictions_are_scikit_learns():
     ref = [m.predict(Q, return_std=True) for m in model.models_]
     assert np.allclose(mu, np.column_stack([r[0] for r in ref]), rtol=0, atol=1e-9)
     assert np.allclose(sd, np.column_stack([r[1] for r in ref]), rtol=0, atol=1e-9)
+
+
+def test_ctrl_c_during_the_local_search_stops_it():
+    """A KeyboardInterrupt while DFO-LS's points run was caught as one start's error: the
+    calibration went on and wrote a worse result with exit 0. It now stops the search (and
+    the command: exit 130) once the solver threads have left; an ordinary error of a
+    simulation batch stays one start's error."""
+    import numpy as np
+    import pytest
+
+    from sensfw.measure.calibration.refine import dfols_solves
+
+    calls = []
+
+    def evaluate(zs, fail=KeyboardInterrupt):
+        calls.append(len(zs))
+        if len(calls) == 3:
+            raise fail()
+        return [np.array([z[0] - 0.3, 2 * (z[1] + 0.1)]) for z in zs]
+
+    starts = [np.zeros(2), np.full(2, 0.5)]
+    with pytest.raises(KeyboardInterrupt):
+        dfols_solves(evaluate, starts, [40, 40], np.full(2, 1e3))
+    calls.clear()
+    out = dfols_solves(lambda zs: evaluate(zs, RuntimeError), starts, [40, 40],
+                       np.full(2, 1e3))
+    assert all("RuntimeError" in o["error"] for o in out)

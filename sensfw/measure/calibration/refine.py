@@ -36,6 +36,9 @@ class Batcher:
         self.cond = threading.Condition()
         self.pending: list[tuple[np.ndarray, dict]] = []
         self.alive = clients
+        #: a KeyboardInterrupt (or SystemExit) met while evaluating: every later request
+        #: gets it at once, and :func:`dfols_solves` raises it once the solvers have left
+        self.interrupted: BaseException | None = None
 
     def __call__(self, z: np.ndarray, client: int = 0) -> np.ndarray | None:
         slot: dict = {"done": threading.Event(), "client": client}
@@ -62,10 +65,14 @@ class Batcher:
                 batch, self.pending = self.pending, []
             batch.sort(key=lambda zs: zs[1]["client"])
             try:
+                if self.interrupted is not None:
+                    raise self.interrupted
                 ws = self.evaluate([z for z, _ in batch])
                 for (_, slot), w in zip(batch, ws, strict=True):
                     slot["w"] = w
             except BaseException as err:  # the solver threads must not wait forever
+                if not isinstance(err, Exception):  # Ctrl-C: stop, do not go on
+                    self.interrupted = err
                 for _, slot in batch:
                     slot["error"] = err
             for _, slot in batch:
@@ -115,6 +122,8 @@ def dfols_solves(evaluate: EvaluateCoded, starts: Sequence[np.ndarray], budgets:
     batcher.serve()
     for t in threads:
         t.join()
+    if batcher.interrupted is not None:  # it was logged as a start's error and went on
+        raise batcher.interrupted
     for i, o in enumerate(out):
         if "error" in o:
             log(f"    DFO-LS start {i + 1}: {o['error']}")
