@@ -401,3 +401,10 @@ def test_a_threshold_that_selects_nothing_is_refused():
         "1 selects nothing: importance is normalised to at most 1")
     data["stages"][0]["select"]["threshold"] = 0.99
     Study.from_dict(data, "x.toml")
+
+
+def test_a_calibration_parameter_listed_twice_is_refused():
+    # it passed validate, then calibrate failed with a bare "duplicate design variable"
+    data = copy.deepcopy(QUICK)
+    data["calibration"]["parameters"] = ["slide_stiffness", "slide_damping", "slide_stiffness"]
+    assert problems(data) == {"calibration.parameters[2]": "'slide_stiffness' is listed twice"}

@@ -52,6 +52,9 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
     26 with two for the base variables, 24 with two for both (``bench/RECOVERY.md``, stop 43)."""
     if len(searches) != 2 or not set(searches) <= {1, 2}:
         raise SensfwError(f"augment: searches must be two of 1 or 2, not {searches!r}")
+    if "attach" in (options or {}):  # it silently overrode the place of NAME@PLACE
+        raise SensfwError(f"effect {effect}: its place is not an option; give it as "
+                          f"{effect}@PLACE")
     eff, problems = build(effect_registry.get(effect), {"attach": attach, **(options or {})})
     if problems:
         raise SensfwError(f"effect {effect}: {describe(problems)}")
@@ -190,7 +193,8 @@ def diagnosed_start(path, name: str, attach: str | None = None
     except (OSError, ValueError, AttributeError) as err:
         raise SensfwError(f"{path}: not a readable diagnose.json ({err})") from None
     if not rows:
-        raise SensfwError(f"{path}: no ranking entry for effect {name!r}")
+        raise SensfwError(f"{path}: no ranking entry for effect {name!r}"
+                          + (f" at {attach!r}" if attach else ""))
     if not isinstance(rows[0].get("params"), dict) or not rows[0].get("place"):
         raise SensfwError(f"{path}: the entry for {name!r} lacks 'params' or 'place'")
     return rows[0]["params"], rows[0]["place"], h0 if isinstance(h0, dict) else None

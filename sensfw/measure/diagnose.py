@@ -54,7 +54,7 @@ from ..runs import Runner, default_workers
 from ..study import Study
 from . import discrepancy, signatures
 from .calibration import Coordinates, Fit, Trial, calibrate
-from .hypotheses import Hypothesis, calibration_residuals
+from .hypotheses import Hypothesis, calibration_residuals, candidate_names
 from .hypotheses import candidates as candidate_hypotheses
 from .io import Measurement
 from .ranking import TIE_BIC, heldout, verdict
@@ -169,6 +169,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     (coded) H0's optimum must lie from the nominal base values for the screen's first
     look to start from these too (:func:`~sensfw.measure.screening.screen`;
     ``math.inf``: never)."""
+    candidate_names(study, candidates, log)  # their errors before anything runs
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
@@ -182,8 +183,14 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
 
     # 1. H0 globally, the model's scatter around it
     log(f"H0: calibrating {', '.join(names)} ({source}), {budget} simulations in all")
+    h0_points = int(0.3 * budget) // n_levels
+    if h0_points < 2 * (len(base) + 1):
+        log(f"notice: a budget of {budget} leaves H0 {h0_points} points for its "
+            f"{len(base)} parameters at {n_levels} level(s), fewer than a design and a "
+            f"local least-squares search need (about {2 * (len(base) + 1)}): the verdict "
+            f"rests on an uncalibrated model (default budget {default_budget(n_levels)})")
     h0 = Hypothesis(None, "", base)
-    h0.fit = calibrate_hypothesis(res, h0, int(0.3 * budget) // n_levels, log=log, **opts)
+    h0.fit = calibrate_hypothesis(res, h0, h0_points, log=log, **opts)
     res.step = "model scatter"
     rough = widen_for_roughness(res, h0.fit, log)
     res.step = "H0"

@@ -118,28 +118,53 @@ class Hypothesis:
         return out
 
 
+def candidate_names(study: Study, names: Sequence[str] | None, log: Log = lambda s: None
+                    ) -> list[tuple[str, str | None]]:
+    """``names`` (``NAME`` or ``NAME@PLACE``; default every registered effect) as (effect,
+    place or None), checked before anything runs: an empty item, an unknown effect, a
+    place the effect does not fit are errors; a candidate given twice (or at a place its
+    own ``NAME`` already covers) is raced once, with a note."""
+    places = model_with_effects(study, []).places()
+    wanted: list[tuple[str, str | None]] = []
+    for c in names or effect_registry.names():
+        name, _, place = c.partition("@")
+        name, place = name.strip(), place.strip() or None
+        if not name:
+            raise SensfwError(f"candidate {c!r}: an empty effect name (the list is "
+                              "NAME or NAME@PLACE, separated by commas)")
+        fits = fitting_places(places, effect_registry.get(name))  # raises for unknown
+        if not fits:
+            raise SensfwError(f"candidate {name}: it fits no place of the model "
+                              f"{study.model_ref()['name']}")
+        if place is not None and place not in fits:
+            raise SensfwError(f"candidate {name}@{place}: the model has no place {place!r} "
+                              f"that {name} fits ({', '.join(fits)})")
+        if (name, place) in wanted or (name, None) in wanted:
+            log(f"  {c.strip()}: given twice; raced once")
+            continue
+        if place is None and any(n == name for n, _ in wanted):
+            log(f"  {name}: every place it fits, besides those given with it")
+            wanted = [(n, p) for n, p in wanted if n != name]
+        wanted.append((name, place))
+    return wanted
+
+
 def candidates(study: Study, names: Sequence[str] | None, found: Mapping,
                base: Coordinates, log: Log = lambda s: None, prune: bool = True
                ) -> list[Hypothesis]:
     """Every candidate effect at every place it fits (``names``: ``NAME`` or
-    ``NAME@PLACE``; default every registered effect), less the effects the study's model
-    already has (an augmented study: their parameters are the model's) and, with
-    ``prune``, the effects whose signature classes the levels do not show (``found``)."""
+    ``NAME@PLACE``; default every registered effect; :func:`candidate_names`), less the
+    effects the study's model already has (an augmented study: their parameters are the
+    model's) and, with ``prune``, the effects whose signature classes the levels do not
+    show (``found``)."""
     model = model_with_effects(study, [])
     places = model.places()
     owned = {p.name: f"{e.name}@{e.attach}" for e in getattr(model, "effects", ())
              for p in e.parameters()}
-    wanted = []
-    for c in names or effect_registry.names():
-        name, _, place = c.partition("@")
-        wanted.append((name.strip(), place.strip() or None))
     out = []
-    for name, place in wanted:
+    for name, place in candidate_names(study, names):
         cls = effect_registry.get(name)
         fits = fitting_places(places, cls)
-        if place is not None and place not in fits:
-            raise SensfwError(f"candidate {name}@{place}: the model has no place {place!r} "
-                              f"that {name} fits ({', '.join(fits)})")
         clash = sorted({owned[p.name] for p in cls().parameters() if p.name in owned})
         if clash:
             log(f"  {name}: the model has it already ({', '.join(clash)}); left out")

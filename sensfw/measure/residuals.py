@@ -147,7 +147,9 @@ class Residuals:
         nominal = self.space.nominal_row()
         (comps,) = self.comparisons(None, [nominal], "nominal model")
         if comps is None:
-            raise SensfwError("the study's model failed at the measured level(s)" + hint)
+            why = self.failures.get("nominal model")
+            raise SensfwError("the study's model failed at the measured level(s)"
+                              + (f": {why}" if why else "") + hint)
         return nominal, comps
 
     def evaluate(self, effects: EffectSpecs | None, points: Sequence[Mapping[str, float]],

@@ -102,7 +102,7 @@ def _linearised(w0: np.ndarray, J: np.ndarray | None, d: np.ndarray, base_z: np.
     A = np.column_stack([J, d]) if J is not None and J.size else d[:, None]
     x, *_ = np.linalg.lstsq(A, -w0, rcond=None)
     c = float(np.clip(x[-1], 0.0, 2.0))
-    dz = x[:-1] if J is not None and J.size else np.zeros(0)
+    dz = x[:-1] if J is not None and J.size else np.zeros_like(base_z)  # no Jacobian: stay
     dz = np.clip(base_z + dz, -1, 1) - base_z
     r = w0 + (J @ dz if J is not None and J.size else 0.0) + c * d
     return float(r @ r), dz, c

@@ -169,9 +169,14 @@ def write_diagnose_report(study, result, path) -> Path:
                                                     if c["flags"] else "")
                  for c in r["calibration"] if c["name"] not in result.variables),
              "notes": "; ".join(r["notes"])} for r in calibrated]
-    frame = pd.DataFrame(rows).set_index("hypothesis")
-    page.table(frame, highlight=pd.Series([r["hypothesis"] in result.named
-                                           for r in calibrated]))
+    if rows:
+        frame = pd.DataFrame(rows).set_index("hypothesis")
+        page.table(frame, highlight=pd.Series([r["hypothesis"] in result.named
+                                               for r in calibrated]))
+    else:
+        page.p(f"No candidate was calibrated: the budget ({result.criteria.get('budget')} "
+               f"simulations, {result.n_simulations} spent) left no room after the base "
+               "parameters and the first looks.", "meta")
     screened = [r for r in result.rows[1:] if not r["surrogate"] and r["screen"]]
     if screened:
         page.p(f"{len(screened)} more candidates were screened on one level only (not "

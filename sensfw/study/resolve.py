@@ -260,6 +260,8 @@ class Study:
                 problems.append((f"calibration.parameters[{i}]",
                                  f"unknown design variable {name!r}; known: "
                                  f"{', '.join(sorted(known))}"))
+            elif name in (cal.parameters or [])[:i]:
+                problems.append((f"calibration.parameters[{i}]", f"{name!r} is listed twice"))
         changes, found = bound_overrides(cal.bounds, self.parameters, "calibration.bounds")
         problems += found
         r = cal.result
