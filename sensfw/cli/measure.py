@@ -297,7 +297,7 @@ def augment(
             out.print(f"  {t['step']:20s} its runs failed (see the run store)")
             continue
         per = per_record(t)
-        out.print(f"  {t['step']:20s} error {t['error']:.3f} dB" +
+        out.print(f"  {t['step']:20s} residual error {t['error']:.3f} dB" +
                   (f" ({per})" if len(t.get("error_per_level") or []) > 1 else ""))
     out.print(f"-> {out_dir}/study.toml, {out_dir}/augment.json, {out_dir}/report.html")
 
@@ -335,7 +335,7 @@ def calibrate(
         out.print(f"  {c['name']} = {c['value']:.4g} {c['unit']} "
                   f"[{c['interval'][0]:.4g}, {c['interval'][1]:.4g}]{flags}")
     for t in result["trajectory"]:
-        out.print(f"  {t['step']:14s} error {t['error']:.3f} dB ({per_record(t)})")
+        out.print(f"  {t['step']:14s} residual error {t['error']:.3f} dB ({per_record(t)})")
     out.print(f"-> {out_dir}/study.toml, {out_dir}/calibrate.json, {out_dir}/report.html")
 
 

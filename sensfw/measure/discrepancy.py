@@ -119,7 +119,16 @@ def fits(w: np.ndarray, k: int, alpha: float = 1e-3) -> bool:
     return chi2(w) <= float(chi2_dist.ppf(1 - alpha, dof))
 
 
+#: what :func:`rms_db` is, where a report or the CLI prints it: not ``compare``'s FRF
+#: error of one channel (:data:`~sensfw.measure.comparison.ERROR_DEFINITION`)
+RESIDUAL_ERROR = ("residual error: the RMS of the dB differences model - measurement over "
+                  "every entry the calibration weighs (the FRF's fractional-octave band "
+                  "levels and the THD, on every channel the model and the records share); "
+                  "compare's FRF error is that of the output channel's lines alone")
+
+
 def rms_db(comparisons: Sequence, entries: Entries) -> float:
-    """RMS of the dB differences (unweighted): the error a user reads."""
+    """RMS of the dB differences (unweighted): the error a user reads
+    (:data:`RESIDUAL_ERROR`)."""
     r, _ = residuals(comparisons, entries)
     return float(np.sqrt(np.mean(r * r))) if len(r) else 0.0

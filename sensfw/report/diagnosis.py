@@ -9,6 +9,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ..measure.discrepancy import RESIDUAL_ERROR
 from .html import Page
 
 
@@ -140,13 +141,14 @@ def write_diagnose_report(study, result, path) -> Path:
            "calibrated on (held-out chi2 per entry).")
     page.h2("Base parameters recalibrated (hypothesis 'parameters')")
     h0 = result.rows[0]
-    page.p(f"FRF error: nominal model {result.errors['nominal']:.2f} dB, recalibrated "
+    page.p(f"Residual error: nominal model {result.errors['nominal']:.2f} dB, recalibrated "
            f"{result.errors['parameters']:.2f} dB (chi2 {h0['chi2']:.1f} for "
            f"{result.n_entries} entries; "
            + ("more than the noise explains" if not h0["fits_noise"] else
               "the noise explains what is left" if not result.named else
               "within the noise's chi-square bound, but the named effect explains far "
               "more of it: an effect's own distortion counts in the measured noise") + ").")
+    page.p(RESIDUAL_ERROR[0].upper() + RESIDUAL_ERROR[1:] + ".", "meta")
     page.table(calibration_table(h0["calibration"]))
     page.h2("Candidates")
     if result.signature_classes:
@@ -237,15 +239,16 @@ def write_augment_report(study, result: dict, path, comparisons: dict | None = N
     ax.set_xticks(np.arange(len(levels)), [_record_label(lv, k) for lv, k in
                                            zip(levels, kinds, strict=True)])
     ax.set_xlabel("record (level, kind)")
-    ax.set_ylabel("FRF error (dB RMS)")
+    ax.set_ylabel("residual error (dB RMS)")
     ax.set_title("The error falls, level by level")
     ax.legend(fontsize=8)
     ax.grid(True, axis="y", alpha=0.3)
     page.figure(fig, "Error trajectory per level: nominal model, base parameters "
                      "recalibrated, the effect added at its nominal values, jointly "
                      "calibrated.")
-    page.table(pd.DataFrame([{"step": t["step"], "error (dB RMS)": t["error"]}
+    page.table(pd.DataFrame([{"step": t["step"], "residual error (dB RMS)": t["error"]}
                              for t in tr]).set_index("step"))
+    page.p(RESIDUAL_ERROR[0].upper() + RESIDUAL_ERROR[1:] + ".", "meta")
     page.h2("Calibrated values")
     page.table(calibration_table(result["calibration"]))
     if result.get("surrogate"):
@@ -272,10 +275,11 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
                 f"{result['n_simulations']} simulations")
     tr = result["trajectory"]
     page.p(f"Calibrated {', '.join(result['variables'])} ({result['variables_from']}) on "
-           f"{len(tr[0]['levels'])} level(s), channels {', '.join(result['channels'])}: FRF "
-           f"error {tr[0]['error']:.2f} dB -> {tr[1]['error']:.2f} dB; "
+           f"{len(tr[0]['levels'])} level(s), channels {', '.join(result['channels'])}: "
+           f"residual error {tr[0]['error']:.2f} dB -> {tr[1]['error']:.2f} dB; "
            + ("the noise explains what is left." if result["fits_noise"] else
               "more is left than the noise explains."), "ok" if result["fits_noise"] else "note")
+    page.p(RESIDUAL_ERROR[0].upper() + RESIDUAL_ERROR[1:] + ".", "meta")
     page.table(calibration_table(result["calibration"]))
     if result.get("surrogate"):
         page.p("Residual surrogate, leave-one-out error per entry (standard errors): "
