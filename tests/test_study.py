@@ -408,3 +408,11 @@ def test_a_calibration_parameter_listed_twice_is_refused():
     data = copy.deepcopy(QUICK)
     data["calibration"]["parameters"] = ["slide_stiffness", "slide_damping", "slide_stiffness"]
     assert problems(data) == {"calibration.parameters[2]": "'slide_stiffness' is listed twice"}
+
+
+def test_an_empty_calibration_list_is_refused():
+    # it behaved as if the section were missing: a screen ran to choose the parameters
+    data = copy.deepcopy(QUICK)
+    data["calibration"]["parameters"] = []
+    assert problems(data)["calibration.parameters"].startswith(
+        "an empty list calibrates nothing")

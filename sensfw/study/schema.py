@@ -189,6 +189,15 @@ class CalibrationSection(_Strict):
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
     result: CalibrationResult | None = None
 
+    @field_validator("parameters")
+    @classmethod
+    def _not_empty(cls, v: list[str] | None) -> list[str] | None:
+        if v is not None and not v:
+            raise ValueError("an empty list calibrates nothing (it ran a screen to choose "
+                             "the parameters instead): name at least one, or leave "
+                             "parameters out to take the screen's selection")
+        return v
+
 
 class CompareSection(_Strict):
     """A published study to set a stage's Eq. 18 results beside (the report's comparison
