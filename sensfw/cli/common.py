@@ -118,7 +118,8 @@ def _runner(study, out_dir: Path, workers, backend, scheduler, retry_failed=Fals
 @contextlib.contextmanager
 def _running(study, out_dir: Path, workers, backend, scheduler, progress, read_also=()):
     """A Runner on ``out_dir/runs`` (reading also the run stores ``read_also``); its
-    progress bar and workers are closed on exit."""
+    progress bar and workers are closed on exit, and the runs that failed are counted
+    (a calibration goes on around them, so nothing else would say so)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     runner = _runner(study, out_dir, workers, backend, scheduler, progress=progress,
                      read_also=read_also)
@@ -127,6 +128,10 @@ def _running(study, out_dir: Path, workers, backend, scheduler, progress, read_a
     finally:
         runner.progress.close()
         runner.close()
+    c = runner.counts
+    if c.failed:
+        say(f"notice: {c.failed} of {c.total} runs failed; their errors are in the run "
+            f"store {out_dir / 'runs'}", style="yellow")
 
 
 def option_value(text: str) -> object:
