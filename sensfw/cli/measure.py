@@ -336,6 +336,8 @@ def calibrate(
                   f"[{c['interval'][0]:.4g}, {c['interval'][1]:.4g}]{flags}")
     for t in result["trajectory"]:
         out.print(f"  {t['step']:14s} residual error {t['error']:.3f} dB ({per_record(t)})")
+    for n in result.get("notes", []):
+        say(f"notice: {n}", style="yellow")
     out.print(f"-> {out_dir}/study.toml, {out_dir}/calibrate.json, {out_dir}/report.html")
 
 

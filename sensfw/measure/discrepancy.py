@@ -98,6 +98,36 @@ def residuals(comparisons: Sequence, entries: Entries) -> tuple[np.ndarray, np.n
     return np.array(r, float), np.array(s, float)
 
 
+def noise_thd_note(comparisons: Sequence, entries: Entries, w: np.ndarray,
+                   channels: Sequence[str] = ()) -> str | None:
+    """A line saying how much of ``chi2 = |w|^2`` the THD entries carry where the measured
+    THD is no more than its record's own noise reads (``thd_floor``): there the entry
+    compares the model's distortion with noise, and a model that is right but nearly
+    linear is charged tens of dB for it (the module docstring's known bias). None where
+    such entries carry under half of chi2. ``channels``: the channels of each level, in
+    the comparisons' order (levels outer), to name them."""
+    total = float(w @ w)
+    i, share, where = 0, 0.0, []
+    for k, (c, centres, thd) in enumerate(zip(comparisons, entries.bands, entries.thd,
+                                              strict=True)):
+        i += len(centres)
+        if thd:
+            floor = getattr(c, "thd_floor", None)
+            if floor and c.thd_measured is not None and c.thd_measured <= floor:
+                share += float(w[i] ** 2)
+                ch = f"{channels[k % len(channels)]} " if channels else ""
+                where.append(f"{ch}at {c.level:g} ({c.thd_measured:.3g} % against "
+                             f"{floor:.3g} %)")
+            i += 1
+    if not total > 0 or share < 0.5 * total:
+        return None
+    return (f"{share:.4g} of chi2 {total:.4g} comes from THD entries whose measured THD is "
+            f"no more than the record's own noise reads ({'; '.join(where[:4])}"
+            + (f"; {len(where) - 4} more" if len(where) > 4 else "") + "): there the "
+            "measurement shows no distortion to fit, and a nearly linear model is charged "
+            "for the noise's; judge the fit by the band entries and compare's FRF error")
+
+
 def weighted(comparisons: Sequence, entries: Entries) -> np.ndarray:
     r, s = residuals(comparisons, entries)
     return r / s

@@ -280,6 +280,8 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
            + ("the noise explains what is left." if result["fits_noise"] else
               "more is left than the noise explains."), "ok" if result["fits_noise"] else "note")
     page.p(RESIDUAL_ERROR[0].upper() + RESIDUAL_ERROR[1:] + ".", "meta")
+    for n in result.get("notes", []):
+        page.note(n)
     page.table(calibration_table(result["calibration"]))
     if result.get("surrogate"):
         page.p("Residual surrogate, leave-one-out error per entry (standard errors): "
