@@ -133,6 +133,8 @@ def candidate_names(study: Study, names: Sequence[str] | None, log: Log = lambda
             raise SensfwError(f"candidate {c!r}: an empty effect name (the list is "
                               "NAME or NAME@PLACE, separated by commas)")
         fits = fitting_places(places, effect_registry.get(name))  # raises for unknown
+        if not fits and names is None:  # every registered effect: those that fit here
+            continue
         if not fits:
             raise SensfwError(f"candidate {name}: it fits no place of the model "
                               f"{study.model_ref()['name']}")

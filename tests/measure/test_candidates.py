@@ -52,3 +52,13 @@ def test_augment_refuses_a_place_given_as_an_option():
                                           "flexible_mode@PLACE"):
         augment(Study.load(QUICK), [], NoRuns(), "flexible_mode", "driveshaft",
                 options={"attach": "clutch"})
+
+
+def test_the_default_candidates_are_the_effects_that_fit_the_model():
+    """Without a list, every registered effect at the places it fits: micro_slip (a joint
+    effect) fits no place of the shaft model and is left out, not an error."""
+    from sensfw.plugins import effects
+
+    got = candidate_names(Study.load(QUICK), None)
+    assert "micro_slip" in effects.names() and all(n != "micro_slip" for n, _ in got)
+    assert ("added_mass", None) in got and all(p is None for _, p in got)
