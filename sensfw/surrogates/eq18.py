@@ -240,7 +240,8 @@ class Eq18(SurrogateBase):
             "rmse": float(np.sqrt(np.mean(e**2))),
             "response": "log(y)" if self.log_response else "y",
         }
-        self.press_residuals_ = e / (1 - h)
+        with np.errstate(divide="ignore", invalid="ignore"):  # leverage 1: undefined
+            self.press_residuals_ = np.where(h < 1 - 1e-9, e / (1 - h), np.nan)
         self.coefficient_table_ = self.coefficients_physical_
         self.coefficient_table_coded_ = self.coefficients_
         return self
