@@ -237,8 +237,17 @@ def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: 
         stages = []
         for stage in study.stages:
             log(f"stage {stage.name}: design {stage.design}")
-            res = run_stage(study, stage, runner, done, (known or {}).get(stage.name),
-                            (validated or {}).get(stage.name))
+            try:
+                res = run_stage(study, stage, runner, done, (known or {}).get(stage.name),
+                                (validated or {}).get(stage.name))
+            except SensfwError as err:
+                if out is not None and stages:  # the stages that finished are written
+                    write_result(StudyResult(study=study, stages=stages, store=runner.store,
+                                             counts=runner.counts,
+                                             stopped={"stage": stage.name,
+                                                      "error": str(err)}),
+                                 out, report=report, wall=time.perf_counter() - t0)
+                raise
             done[stage.name] = res
             stages.append(res)
             if res.selected is not None:
@@ -283,7 +292,14 @@ def load_result(out_dir: str | Path) -> StudyResult:
                  if r["label"] in v})
     validated = {st["name"]: st["validation"] for st in stages if "validation" in st}
     runs = StoredRuns(RunStore(out / "runs"), RunCounts(**data.get("runs", {})))
-    return run_study(study, runs, known=known, validated=validated)
+    stopped = data.get("stopped")
+    if stopped is not None:  # a study that stopped: the stages that finished
+        spec = study.spec.model_dump(mode="json", exclude_none=True)
+        spec["stages"] = spec["stages"][:len(stages)]
+        study = Study.from_dict(spec, study.source)
+    result = run_study(study, runs, known=known, validated=validated)
+    result.stopped = stopped
+    return result
 
 
 def plan(study: Study) -> list[dict]:

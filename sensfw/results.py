@@ -50,6 +50,9 @@ class StudyResult:
     stages: list[StageResult]
     store: RunStore
     counts: RunCounts
+    #: where a study stopped: ``{"stage": name, "error": message}`` of the stage that
+    #: failed (``stages`` holds those before it), None for a finished study
+    stopped: dict | None = None
 
 
 def jsonable(x):
@@ -103,8 +106,11 @@ def results_json(res: StudyResult) -> dict:
             entry["notes"] = st.notes
         stages.append(entry)
     source = str(Path(res.study.source).resolve()) if res.study.source else None
-    return jsonable({"study": res.study.name, "study_file": source,
-                      "runs": res.counts.as_dict(), "stages": stages})
+    out = {"study": res.study.name, "study_file": source, "runs": res.counts.as_dict(),
+           "stages": stages}
+    if res.stopped is not None:
+        out["stopped"] = res.stopped
+    return jsonable(out)
 
 
 def keep_study_file(study: Study, out: str | Path) -> Path:

@@ -323,3 +323,35 @@ def test_a_score_that_does_not_vary_gets_one_line_not_surrogates(tmp_path):
     html = re.sub(r'src="data:image/png;base64,[^"]*"', "", (tmp_path / "report.html")
                   .read_text())
     assert "does not vary" in html and "nan" not in html.lower()
+
+
+def test_a_study_that_stops_at_a_stage_keeps_the_stages_before_it(tmp_path):
+    """Every DoE run diverges (x3 above 2.5 on its stage's bounds): the study stops with
+    the DoE's error, and the screen that finished is written (results.json, report) and
+    rebuilt by load_result. Before, the folder held only the runs and the study file."""
+    from sensfw_test_models import FAULT_INJECTION
+
+    from sensfw.errors import SensfwError
+    from sensfw.pipeline import load_result, run_study
+    from sensfw.study import Study
+
+    faults = {"model": "ishigami", "diverge": {"parameter": "x3", "above": 2.5}}
+    spec = {"study": {"name": "stops", "seed": 1},
+            "model": {"name": FAULT_INJECTION, "options": faults},
+            "execution": {"backend": "serial"},
+            "stages": [{"name": "screen", "design": "oat", "variables": ["x1", "x2"],
+                        "scorers": [{"name": "value", "label": "y"}],
+                        "select": {"threshold": 0.05}},
+                       {"name": "doe", "design": "full_factorial", "variables": ["x3"],
+                        "bounds": {"x3": {"min": 2.6, "nominal": 2.8, "max": 3.0}},
+                        "scorers": [{"name": "value", "label": "y"}],
+                        "surrogates": ["eq18"]}]}
+    with pytest.raises(SensfwError, match="doe"):
+        run_study(Study.from_dict(spec), out=tmp_path)
+    data = json.loads((tmp_path / "results.json").read_text())
+    assert [s["name"] for s in data["stages"]] == ["screen"]
+    assert data["stopped"]["stage"] == "doe"
+    assert "The study stopped at stage " in (tmp_path / "report.html").read_text()
+    again = load_result(tmp_path)
+    assert [s.name for s in again.stages] == ["screen"] and again.stopped["stage"] == "doe"
+    assert again.stages[0].selected == data["stages"][0]["selected"]

@@ -385,6 +385,10 @@ def write_study_report(result, path: str | Path) -> Path:
     if c.failed:
         page.note(f"{c.failed} run(s) failed; the analyses below use the others (see each "
                   "stage).")
+    if result.stopped is not None:
+        page.note(f"The study stopped at stage {result.stopped['stage']!r}: "
+                  f"{result.stopped['error']}. The stages before it are below; every run is "
+                  "in the run store, so the study run again simulates only what is missing.")
     for stage in result.stages:
         groups = stage.spec.groups
         page.h2(f"Stage {stage.name}: {stage.spec.design} on {len(stage.space)} variables"
