@@ -55,7 +55,8 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
     ``summary_`` (Eq. 18's hat matrix), else its ``loo_predict()``, else n refits. A
     number that cannot be computed (a score that does not vary; a refit on fewer runs that
     the surrogate cannot fit, e.g. Eq. 18 on 4/5 of a 13-run Box-Behnken design) is None,
-    with the reason in ``"notes"``."""
+    with the reason in ``"notes"``, keyed by the number it concerns (``"r2"``, ``"q2_loo"``,
+    ``"q2_kfold"``)."""
     Xa, ya = _arrays(X, y)
     n = len(ya)
     if n < 3:
@@ -79,17 +80,18 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
         "q2_kfold": None,
         "fitted": fitted.tolist(),
         "residuals": resid.tolist(),
-        "notes": [],
+        "notes": {},
     }
     if not ss > 0:
-        out["notes"].append(f"the score does not vary over the {n} runs (every one "
-                            f"{ya[0]:.4g}): R², R²adj and Q² are undefined")
+        out["notes"]["r2"] = (f"the score does not vary over the {n} runs (every one "
+                              f"{ya[0]:.4g}): R², R²adj and Q² are undefined")
     undefined = out["q2_loo"] is not None and not np.isfinite(out["q2_loo"])
     if undefined:
         out["q2_loo"] = None
         if ss > 0:
-            out["notes"].append("Q² LOO: a run has leverage 1 (the fit passes through it "
-                                "whatever its value), so its left-out prediction is undefined")
+            out["notes"]["q2_loo"] = ("a run has leverage 1 (the fit passes through it "
+                                      "whatever its value), so its left-out prediction is "
+                                      "undefined")
     out["q2_loo_method"] = "hat matrix" if out["q2_loo"] is not None else None
     loo = estimator.loo_predict() if out["q2_loo"] is None and not undefined else None
     if loo is not None:
@@ -102,7 +104,7 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
             out["q2_loo"] = q2_cv(estimator, X, ya, KFold(n_splits=n))
             out["q2_loo_method"] = f"{n} refits"
         except SensfwError as err:
-            out["notes"].append(f"Q² LOO: a refit on {n - 1} runs failed ({err})")
+            out["notes"]["q2_loo"] = f"a refit on {n - 1} runs failed ({err})"
     kk = min(k, n)
     if kk >= 2:
         try:
@@ -111,8 +113,8 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
         except SensfwError as err:
             lo, hi = n - -(-n // kk), n - n // kk  # training folds' sizes
             size = f"{lo}" if lo == hi else f"{lo}-{hi}"
-            out["notes"].append(f"Q² {kk}-fold: a refit on {size} of the {n} runs cannot be "
-                                f"fitted ({err})")
+            out["notes"]["q2_kfold"] = (f"a refit on {size} of the {n} runs ({kk} folds) "
+                                        f"cannot be fitted ({err})")
     (osm, osr), (slope, intercept, _) = stats.probplot(resid, dist="norm")
     out["qq"] = {"theoretical": osm.tolist(), "ordered": osr.tolist(), "slope": float(slope),
                  "intercept": float(intercept)}

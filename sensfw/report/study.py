@@ -200,6 +200,9 @@ def validation_table(per: dict) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("surrogate").astype(float)
 
 
+#: The column of :func:`validation_table` a validation's note (by its key) concerns.
+VALIDATION_COLUMN = {"r2": "R²", "q2_loo": "Q² LOO", "q2_kfold": "Q² k-fold"}
+
 #: Why a column of :func:`validation_table` can be empty for every surrogate.
 EMPTY_COLUMN_REASON = {
     "confirm RMSE": "the stage has no confirmation runs (stage confirmation_runs = 0)",
@@ -445,10 +448,10 @@ def write_study_report(result, path: str | Path) -> Path:
                            "score" if failed > 0 else "") + ")")
                 noted = set()
                 for name, v in per.items():
-                    for n in v.get("notes") or ():
-                        page.note(f"{name}: {n}")
-                        noted |= {"Q² LOO"} if n.startswith("Q² LOO") else \
-                            {"Q² k-fold"} if n.startswith("Q² ") else set()
+                    for key, n in (v.get("notes") or {}).items():
+                        column = VALIDATION_COLUMN.get(key, key)
+                        page.note(f"{name}: {column}: {n}")
+                        noted.add(column)
                 frame, dropped = drop_empty_columns(validation_table(per), sorted(noted))
                 page.table(frame.astype(object).where(frame.notna(), "n/a"))
                 page.p("R²adj and Q² on the scale of the score; Q² from leave-one-out and "
