@@ -269,6 +269,21 @@ def write_augment_report(study, result: dict, path, comparisons: dict | None = N
     return page.write(path)
 
 
+def _fits_plainly(result: dict) -> bool:
+    """The calibrated point passes the noise's test, and not only through the model's own
+    scatter there (``fits_noise_without_scatter``; absent in older results: not asked)."""
+    return bool(result["fits_noise"]) and result.get("fits_noise_without_scatter") is not False
+
+
+def _noise_verdict(result: dict) -> str:
+    if not result["fits_noise"]:
+        return "more is left than the noise explains."
+    if not _fits_plainly(result):
+        return ("the noise explains what is left only with the model's own scatter at "
+                "this point counted (notice below).")
+    return "the noise explains what is left."
+
+
 def write_calibrate_report(study, result: dict, path, comparisons: dict | None = None
                            ) -> Path:
     page = Page(f"sensfw: base parameters calibrated ({study.name})",
@@ -277,8 +292,7 @@ def write_calibrate_report(study, result: dict, path, comparisons: dict | None =
     page.p(f"Calibrated {', '.join(result['variables'])} ({result['variables_from']}) on "
            f"{len(tr[0]['levels'])} level(s), channels {', '.join(result['channels'])}: "
            f"residual error {tr[0]['error']:.2f} dB -> {tr[1]['error']:.2f} dB; "
-           + ("the noise explains what is left." if result["fits_noise"] else
-              "more is left than the noise explains."), "ok" if result["fits_noise"] else "note")
+           + _noise_verdict(result), "ok" if _fits_plainly(result) else "note")
     page.p(RESIDUAL_ERROR[0].upper() + RESIDUAL_ERROR[1:] + ".", "meta")
     for n in result.get("notes", []):
         page.note(n)
