@@ -64,8 +64,9 @@ def simulate(
                           "random, stepped_sine")
     if levels and amplitude is not None:
         raise SensfwError("give --amplitude or --levels, not both")
+    tokens = [v.strip() for v in levels.split(",")] if levels else [None]
     try:
-        values = [float(v) for v in levels.split(",")] if levels else [amplitude]
+        values = [float(v) for v in tokens] if levels else [amplitude]
     except ValueError:
         raise SensfwError(f"--levels {levels!r}: expected numbers separated by commas") \
             from None
@@ -87,6 +88,8 @@ def simulate(
         sig, info = synthesize(study, sets, effect or [], amplitude=level,
                                excitation=excitation, rig=rig)
         records.append((sig, info))
+    if len(set(values)) < len(values):
+        raise SensfwError(f"--levels {levels!r}: a level is given twice")
     out_file.parent.mkdir(parents=True, exist_ok=True)
     meta = {"source": "sensfw simulate", "excitation": excitation or study.excitation.kind,
             "effects": [e for e in effect or []], "noise": noise, "offset": offset,
@@ -96,9 +99,10 @@ def simulate(
         written = [out_file]
     else:
         written = []
-        for sig, info in records:
+        for (sig, info), token in zip(records, tokens, strict=True):
+            # one file per level, named as the level was written (--levels 0.5,1.0: _1.0)
             path = out_file if len(records) == 1 else \
-                out_file.with_name(f"{out_file.stem}_{info['amplitude']:g}{out_file.suffix}")
+                out_file.with_name(f"{out_file.stem}_{token}{out_file.suffix}")
             written.append(write_csv(path, sig, level=info["amplitude"], meta=meta))
     paths = written * len(records) if len(written) == 1 else written
     for (sig, info), path in zip(records, paths, strict=True):

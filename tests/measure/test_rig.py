@@ -135,7 +135,8 @@ def test_levels_in_one_call_as_csv_files_and_as_one_uff(cli, tmp_path):
                "--noise", "0.02")
     assert proc.returncode == 0, proc.stderr
     files = sorted(tmp_path.glob("m_*.csv"))
-    assert [f.name for f in files] == ["m_0.1.csv", "m_0.3.csv", "m_1.csv"]
+    # named as the levels were written (1.0, not 1)
+    assert [f.name for f in files] == ["m_0.1.csv", "m_0.3.csv", "m_1.0.csv"]
     # one UFF file with every level (what --out u.uff writes)
     from sensfw.measure.io import write_uff
 
@@ -154,6 +155,9 @@ def test_levels_in_one_call_as_csv_files_and_as_one_uff(cli, tmp_path):
     res = CliRunner().invoke(app, ["simulate", str(study_file), "--out", str(tmp_path / "x.csv"),
                                    "--levels", "0.1,-2"])
     assert res.exit_code == 2 and "levels must be positive" in res.output
+    res = CliRunner().invoke(app, ["simulate", str(study_file), "--out", str(tmp_path / "x.csv"),
+                                   "--levels", "0.5, .5"])
+    assert res.exit_code == 2 and "a level is given twice" in res.output
 
 
 def test_the_measured_record_drives_an_exudyn_model_like_the_closed_form():
