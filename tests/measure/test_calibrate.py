@@ -322,3 +322,35 @@ def test_ctrl_c_during_the_local_search_stops_it():
     out = dfols_solves(lambda zs: evaluate(zs, RuntimeError), starts, [40, 40],
                        np.full(2, 1e3))
     assert all("RuntimeError" in o["error"] for o in out)
+
+
+def test_an_interval_holds_the_runs_that_fit_as_well_as_the_best():
+    """A response symmetric in ``p`` (the data see ``p^2``): two basins, at ``p = -1`` and
+    ``p = +1``, equally deep. The Laplace interval describes the one the search ended in;
+    the run in the other basin has the same chi2, so by the likelihood ratio it belongs in
+    the 95 % interval (every point within 3.84 s^2 of the best does), and the interval is
+    widened to it and flagged. A point 10 above the best (beyond 3.84) is not taken."""
+    from sensfw.measure.calibration import Fit, Trial
+
+    coords = Coordinates.of(None, [Parameter("p", "", 0.5, -2.0, 2.0)])
+    t = np.linspace(0, 1, 40)
+    noise = 0.01 * np.sin(37 * t)  # a fixed misfit: chi2 0.04 at either optimum
+
+    def w(p):
+        return (p * p * t - t) / 0.01 + noise / 0.01
+
+    trials = [Trial({"p": p}, w(p)) for p in (1.0, -1.0, 0.0)]
+    J = (w(1.0 + 1e-6) - w(1.0)) / 1e-6 * 2.0  # d w / d z (coded: p = 2 z)
+    fit = Fit(coords, trials[0], J[:, None], trials)
+    row = fit.summary()[0]
+    lo, hi = row["interval"]
+    assert lo <= -1.0 and hi >= 1.0, row
+    assert any("widened" in f for f in row["flags"])
+    # the Laplace interval alone: +-1.96 sd around +1 (sd from J), far from -1
+    sd = math.sqrt(fit.covariance()[0, 0]) * 2.0  # coded -> physical (p = 2 z)
+    assert 1.96 * sd < 0.05
+    # a run in the other basin but 10 above the best in chi2 is outside the bound
+    far = Trial({"p": -1.0}, w(-1.0) + np.sqrt(10.0 / len(t)))
+    fit2 = Fit(coords, trials[0], J[:, None], [trials[0], far])
+    row2 = fit2.summary()[0]
+    assert row2["interval"][0] > 0.9 and not row2["flags"], row2

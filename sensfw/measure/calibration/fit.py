@@ -6,6 +6,14 @@ At the optimum the Laplace approximation gives the coded covariance ``s^2 (J^T J
 from it 95 % intervals in physical units and identifiability flags: a parameter whose
 interval spans more than half its range is not identified by the data; a parameter within
 2 % of a bound is reported as on it.
+
+That interval is local: it sees the basin the search ended in. Every point the calibration
+ran whose chi2 lies within ``3.84 s^2`` of the best (the likelihood ratio's 95 % bound for
+one parameter, chi-square with 1 degree of freedom, on the same scale ``s^2``) lies inside
+the 95 % profile-likelihood region, so each of its coordinates belongs in that
+parameter's interval; the interval reported is the hull of the local one and those points,
+flagged where they widen it (a second basin, or a long valley the local curvature
+understates).
 """
 
 from __future__ import annotations
@@ -110,19 +118,44 @@ class Fit:
                                 if r.get(k) is not None and math.isfinite(r[k])}}
                             for r in records or []]}
 
+    def as_good(self) -> np.ndarray:
+        """Coded points of the trials whose chi2 is within ``3.84 s^2`` of the best
+        (module docstring): inside the 95 % profile-likelihood region; shape (m, k)."""
+        k = len(self.coords)
+        w = self.best.w
+        if w is None or k == 0:
+            return np.zeros((0, k))
+        s2 = max(1.0, self.chi2 / max(len(w) - k, 1))
+        bound = self.chi2 + 3.84 * s2
+        names = set(self.coords.names)
+        pts = [self.coords.code(t.values) for t in [self.best, *self.trials]
+               if t.w is not None and names <= set(t.values) and t.chi2 <= bound]
+        return np.array(pts, float).reshape(-1, k)
+
     def summary(self) -> list[dict]:
-        """Per axis: value, 95 % interval, coded standard deviation and flags."""
+        """Per axis: value, 95 % interval (the Laplace interval widened to the trials that
+        fit as well, module docstring), coded standard deviation and flags."""
         cov = self.covariance()
         z = self.z
+        good = self.as_good()
         rows = []
         for i, a in enumerate(self.coords.axes):
             sd = float(np.sqrt(max(cov[i, i], 0.0))) if cov is not None else math.inf
-            lo, hi = (a.decode(z[i] - 1.96 * sd), a.decode(z[i] + 1.96 * sd)) \
-                if math.isfinite(sd) else (a.low, a.high)
+            zlo, zhi = (z[i] - 1.96 * sd, z[i] + 1.96 * sd) if math.isfinite(sd) \
+                else (-1.0, 1.0)
             flags = []
+            widened = bool(len(good)) and (good[:, i].min() < zlo or good[:, i].max() > zhi)
+            if widened:
+                zlo, zhi = min(zlo, good[:, i].min()), max(zhi, good[:, i].max())
+                flags.append("interval widened to runs that fit as well (chi2 within "
+                             "the 95 % likelihood-ratio bound of the best)")
+            zlo, zhi = max(zlo, -1.0), min(zhi, 1.0)
+            lo, hi = a.decode(zlo), a.decode(zhi)
             if z[i] <= -0.98 or z[i] >= 0.98:
                 flags.append("on its lower bound" if z[i] < 0 else "on its upper bound")
-            if not sd < 0.5:
+            # the Laplace rule (sd 0.5: the interval spans the range), or runs as good
+            # across nearly all of it
+            if not sd < 0.5 or (widened and zhi - zlo >= 1.96):
                 flags.append("not identified by these data")
             rows.append({"name": a.name, "unit": a.unit, "value": a.decode(z[i]),
                          "interval": [lo, hi], "coded_sd": sd, "nominal": a.nominal,
