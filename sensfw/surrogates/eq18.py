@@ -77,9 +77,22 @@ def design_matrix(X: np.ndarray, names: list[str], interaction: str = "product")
     return np.column_stack(cols), terms
 
 
-def _table(res, terms) -> pd.DataFrame:
-    return pd.DataFrame({"term": terms, "estimate": res.params, "se": res.bse,
-                         "t": res.tvalues, "p": res.pvalues})
+def _table(res, terms, scale: np.ndarray) -> pd.DataFrame:
+    """The coefficient table in the design matrix's own units (the fit's columns were
+    divided by ``scale``; t and p do not change with it)."""
+    return pd.DataFrame({"term": terms, "estimate": res.params / scale,
+                         "se": res.bse / scale, "t": res.tvalues, "p": res.pvalues})
+
+
+def column_scale(A: np.ndarray) -> np.ndarray:
+    """Each column's largest magnitude (1 for a zero column): the fit runs on ``A /
+    scale``. In physical units Eq. 18's columns span many decades (a stiffness of 3e6 N/mm
+    squared beside a ratio of 1e-5), and the pseudo-inverse behind statsmodels' OLS then
+    cuts singular values that equilibrated columns keep: a rank-deficiency warning and
+    coefficients that are not the least-squares solution. Scaling columns changes neither
+    the fitted values nor the t statistics."""
+    s = np.max(np.abs(A), axis=0)
+    return np.where(s > 0, s, 1.0)
 
 
 def coded_to_physical(m: int, mid: np.ndarray, half: np.ndarray) -> np.ndarray:
@@ -209,16 +222,19 @@ class Eq18(SurrogateBase):
                 "design does not vary independently: a square on two levels, a variable "
                 "left at two levels by failed runs); Eq. 18 needs three levels of every "
                 "variable: a 3-level or response-surface design, or another surrogate")
+        self.scale_ = column_scale(A)
+        A = A / self.scale_
         res = sm.OLS(y, A).fit()
         self.result_ = res
         self.terms_ = terms
-        self.coefficients_ = _table(res, terms)
+        self.coefficients_ = _table(res, terms, self.scale_)
         if self.coding == "coded" and self.interaction == "product":
             from scipy import stats
 
             T = coded_to_physical(X.shape[1], self.mid_, self.half_)
-            beta = T @ res.params
-            se = np.sqrt(np.maximum(np.diag(T @ res.cov_params() @ T.T), 0.0))
+            S = np.diag(1.0 / self.scale_)  # the fit's coefficients -> the coded ones
+            beta = T @ S @ res.params
+            se = np.sqrt(np.maximum(np.diag(T @ S @ res.cov_params() @ S @ T.T), 0.0))
             with np.errstate(divide="ignore", invalid="ignore"):
                 t = beta / se
             p = 2 * stats.t.sf(np.abs(t), res.df_resid)
@@ -250,7 +266,7 @@ class Eq18(SurrogateBase):
         X = self._check_predict(X)
         A, _ = design_matrix(self._encode(self._features(X)), feature_names(self),
                              self.interaction)
-        return A
+        return A / self.scale_
 
     def _back(self, v):
         return np.exp(v) if self.log_response else v

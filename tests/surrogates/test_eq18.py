@@ -103,3 +103,21 @@ def test_a_validation_refit_that_cannot_be_fitted_leaves_that_number_out():
         "a refit on 10-11 of the 13 runs (5 folds) cannot be fitted")
     const = validate(make_surrogate("polynomial").fit(X, np.ones(13)), X, np.ones(13))
     assert "does not vary" in const["notes"]["r2"]
+
+
+def test_physical_units_are_fitted_on_equilibrated_columns():
+    """Table 2's physical units make Eq. 18's ratio form a matrix of condition 4e18 (a
+    stiffness of 3e6 squared beside ratios of 1e-7): statsmodels' pseudo-inverse warned of
+    a rank deficiency there. Fitted on columns scaled to unit magnitude (condition 1.2e3)
+    it warns of nothing, and its coefficients are numpy's least squares on the same
+    columns to 1e-9 (relative)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = make_surrogate("eq18", interaction="ratio", coding="physical").fit(X, Y)
+    A, _ = design_matrix(X.to_numpy(float), list(X.columns), "ratio")
+    s = np.abs(A).max(axis=0)
+    c, *_ = np.linalg.lstsq(A / s, Y.to_numpy(), rcond=None)
+    np.testing.assert_allclose(r.coefficients_["estimate"].to_numpy(), c / s, rtol=1e-9)
+    np.testing.assert_allclose(r.predict(X), A @ (c / s), rtol=1e-9, atol=1e-9)
