@@ -70,6 +70,8 @@ def simulate(
     except ValueError:
         raise SensfwError(f"--levels {levels!r}: expected numbers separated by commas") \
             from None
+    if len(set(values)) < len(values):
+        raise SensfwError(f"--levels {levels!r}: a level is given twice")
     if any(v is not None and not v > 0 for v in values):
         raise SensfwError(f"--levels {levels!r}: levels must be positive" if levels else
                           f"--amplitude {amplitude!r}: must be positive")
@@ -88,8 +90,6 @@ def simulate(
         sig, info = synthesize(study, sets, effect or [], amplitude=level,
                                excitation=excitation, rig=rig)
         records.append((sig, info))
-    if len(set(values)) < len(values):
-        raise SensfwError(f"--levels {levels!r}: a level is given twice")
     out_file.parent.mkdir(parents=True, exist_ok=True)
     meta = {"source": "sensfw simulate", "excitation": excitation or study.excitation.kind,
             "effects": [e for e in effect or []], "noise": noise, "offset": offset,

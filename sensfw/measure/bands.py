@@ -126,6 +126,20 @@ def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.nda
     return np.array(out)
 
 
+#: a record's usable bandwidth is its sample rate over this (the pass band of a data
+#: acquisition's anti-aliasing filter: LMS, B&K and NI analysers show fs / 2.56)
+ALIAS_FREE = 2.56
+
+
+def usable_limit(sig: Signals) -> float:
+    """The highest frequency a record holds: its Nyquist frequency, or for one recorded
+    below its present rate and resampled to it (``meta["recorded_fs"]``,
+    :func:`sensfw.measure.checks.prepare`) the recorded rate over :data:`ALIAS_FREE`: above
+    that its spectrum is the resampling filter's stop band, not the structure's."""
+    fr = float(sig.meta.get("recorded_fs", sig.fs))
+    return sig.fs / 2 if fr >= sig.fs * (1 - 1e-6) else fr / ALIAS_FREE
+
+
 def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
     """Standard deviation of the output noise of a record (assumed white), from the
     residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n sigma^2``,
@@ -135,9 +149,16 @@ def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
     Exact for a linear response; harmonic distortion of a swept record does not follow
     the local fit either (its phase turns by ~1 rad per line relative to the force's), so a
     strongly nonlinear record gives an upper bound: the low quantile keeps to the lines
-    where the distortion is weakest. 0 for a noise-free linear record."""
-    _, _, _, resid = _local_fit(sig, channel)
-    q = float(np.quantile(resid[1:], quantile)) / -np.log1p(-quantile)
+    where the distortion is weakest. 0 for a noise-free linear record.
+
+    A record resampled from a lower rate holds its noise below :func:`usable_limit` only;
+    the quantile is taken over those bins, which gives the white noise at the present
+    rate of the same density there (for the mean over the record, the same standard
+    error as the recorded samples give: ``sigma_r^2 / n_r``). Over every bin it would be
+    the empty stop band's, nearly 0."""
+    f, _, _, resid = _local_fit(sig, channel)
+    held = resid[1:][f[1:] < usable_limit(sig)]
+    q = float(np.quantile(held if len(held) else resid[1:], quantile)) / -np.log1p(-quantile)
     return float(np.sqrt(q / len(sig.force)))
 
 

@@ -40,7 +40,7 @@ from ..excitation import Excitation, SampledForce
 from ..models.base import Signals
 from ..signal.stepped import detect_steps, direction_of
 from ..signal.sweep import SweepEstimate, estimate_sweep
-from .bands import band_rms
+from .bands import ALIAS_FREE, band_rms
 from .columns import fits
 from .comparison import amount
 from .lines import frf_drive
@@ -48,9 +48,6 @@ from .measurement import Measurement
 
 #: relative tolerance on f0, f1 and duration for "the record is the study's sweep"
 SWEEP_TOLERANCE = 0.03
-#: a record's usable bandwidth is its sample rate over this (the pass band of a data
-#: acquisition's anti-aliasing filter: LMS, B&K and NI analysers show fs / 2.56)
-ALIAS_FREE = 2.56
 
 
 def recorded_band(meas: Measurement, band: tuple[float, float], study_fs: float
@@ -127,12 +124,41 @@ def check_channels(meas: Measurement, used: list[str]) -> None:
                                               f"level or the sensor range", name)
 
 
+def _cut_by_the_record(est: SweepEstimate, excitation: Excitation, f_top: float | None,
+                       tolerance: float) -> bool:
+    """Whether the estimated sweep is the study's seen through a record that holds nothing
+    above ``f_top`` (:func:`recorded_band`): it ends near ``f_top`` (the record's pass band
+    fades it out there) and took the time the study's sweep takes from its start to that
+    frequency."""
+    f1 = getattr(excitation, "f1", None)
+    if (f_top is None or f1 is None or not f_top < f1 or not est.is_sweep
+            or not hasattr(excitation, "frequency")):
+        return False
+    if not f_top * (1 - 0.25) <= est.f1 <= f1 * (1 + tolerance):
+        return False
+    grid = np.linspace(0.0, excitation.duration, 4001)
+    freq = np.maximum.accumulate(excitation.frequency(grid))
+    span = float(np.interp(est.f1, freq, grid) - np.interp(est.f0, freq, grid))
+    return span > 0 and abs(est.duration / span - 1) <= tolerance
+
+
 def sweep_mismatch(est: SweepEstimate, excitation: Excitation,
-                   tolerance: float = SWEEP_TOLERANCE) -> str | None:
-    """Why the estimated excitation is not the study's (``None`` when it is)."""
+                   tolerance: float = SWEEP_TOLERANCE, f_top: float | None = None
+                   ) -> str | None:
+    """Why the estimated excitation is not the study's (``None`` when it is). ``f_top``:
+    the highest frequency the record holds where it was sampled below the study's rate
+    (:func:`recorded_band`); there the record shows the study's sweep only up to it, so
+    its end and duration are those of the study's sweep cut at ``f_top``
+    (:func:`_cut_by_the_record`)."""
     if est.kind != excitation.kind:
         return f"it is a {est.kind.replace('_', ' ')}, the study's is a " \
                f"{excitation.kind.replace('_', ' ')}"
+    if _cut_by_the_record(est, excitation, f_top, tolerance):
+        f0 = getattr(excitation, "f0", None)
+        if f0 is not None and not abs(est.f0 / f0 - 1) <= tolerance:
+            return f"f0 = {est.f0:.4g} differs from the study's {f0:.4g} by more than " \
+                   f"{tolerance:.0%}"
+        return None
     for name, got, want in (("f0", est.f0, getattr(excitation, "f0", None)),
                             ("f1", est.f1, getattr(excitation, "f1", None)),
                             ("duration", est.duration, excitation.duration)):
@@ -288,12 +314,22 @@ def prepare(meas: Measurement, study) -> Measurement:
         raise MeasurementError(meas.file, f"the record is {span:.3g} s long ({len(sig.force)} "
                                f"samples), less than two periods of the study's lowest "
                                f"frequency, {ex.f0:g} Hz: too short for its FRF", "time")
+    if sig.fs / ALIAS_FREE <= ex.f0:
+        raise MeasurementError(meas.file, f"sampled at {sig.fs:.4g} Hz, it holds no line of "
+                               f"the study's band {ex.f0:g}-{ex.f1:g} Hz (its lines end at "
+                               f"fs / {ALIAS_FREE:g} = {sig.fs / ALIAS_FREE:.4g} Hz); if the "
+                               "time column is in ms, say so in its header: 'time [ms]'",
+                               "time")
     if sig.fs < ex.fs * (1 - 1e-6) and sig.fs / ALIAS_FREE < ex.f1:
         meas.notes.append(f"sampled at {sig.fs:g} Hz: it holds no lines above "
                           f"{sig.fs / ALIAS_FREE:.4g} Hz (fs / {ALIAS_FREE:g}, the anti-aliasing "
                           f"filter's pass band), below the study's {ex.f1:g} Hz; compare's "
                           "error leaves them out")
-    est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
+    try:
+        est = estimate_sweep(sig.force, sig.fs, band=(ex.f0, ex.f1))
+    except ValueError as err:  # scipy's filters on a record too short for them
+        raise MeasurementError(meas.file, f"cannot read the excitation ({len(sig.force)} "
+                               f"samples at {sig.fs:.4g} Hz): {err}", "force") from None
     if est.kind == "silent":
         raise MeasurementError(meas.file, "the excitation channel is silent", "force")
     meas.sweep = est
@@ -304,7 +340,8 @@ def prepare(meas: Measurement, study) -> Measurement:
     meas.level = float(level)
     if est.kind == "random":
         random_level(meas, (ex.f0, ex.f1))
-    mismatch = sweep_mismatch(est, ex)
+    slow = sig.fs < ex.fs * (1 - 1e-6)
+    mismatch = sweep_mismatch(est, ex, f_top=sig.fs / ALIAS_FREE if slow else None)
     if mismatch is None and est.drift > DRIFT_TOLERANCE:
         mismatch = f"its amplitude drifts by +-{est.drift:.0%}"
     voltage = meas.input_unit != "N"

@@ -30,6 +30,7 @@ from .bands import (
     noise_sigma,
     octave_bands,
     third_octave_bands,
+    usable_limit,
 )
 from .checks import recorded_band
 from .comparison import ERROR_DEFINITION, Comparison, LevelComparison, display_unit
@@ -68,12 +69,12 @@ class _Side:
     harmonics: dict[int, float]
 
 
-def _side(sig: Signals, channel: str, band: tuple[float, float], edges, detail: bool
-          ) -> _Side:
+def _side(sig: Signals, channel: str, band: tuple[float, float], edges, detail: bool,
+          f_max: float) -> _Side:
     f, db, H = frf_db(sig, channel, band, complex_frf=True)
     return _Side(f, db, band_frf_db(sig, channel, edges), band_noise(sig, channel, edges),
                  fit_resonances(f, H, resonances(f, db)) if detail else [],
-                 harmonics(sig, channel))
+                 harmonics(sig, channel, f_max=f_max))
 
 
 #: the measured side of recent comparisons (a calibration compares hundreds of model runs
@@ -87,8 +88,9 @@ def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges)
     if hit is None or hit[0] is not sig:
         if len(_MEASURED) > 64:
             _MEASURED.clear()
-        hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True),
-                                harmonic_floor(sig, channel),
+        top = usable_limit(sig)
+        hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True, top),
+                                harmonic_floor(sig, channel, f_max=top),
                                 line_noise_db(sig, channel, band))
     return hit[1], hit[2], hit[3]
 
@@ -112,7 +114,7 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
         return compare_lines(measured, model, channel, band, level, file, detail, error_band)
     edges = analysis_bands(*band)
     mx, floor, (fn, line_noise) = _measured_side(measured, channel, band, edges)
-    mm = _side(model, channel, band, edges, detail)
+    mm = _side(model, channel, band, edges, detail, usable_limit(measured))
     f, dbm, dbx = mm.f, mm.db, mx.db
     if len(f) != len(mx.f) or not np.allclose(f, mx.f):
         raise ValueError("model and measurement have different frequency axes; align first")

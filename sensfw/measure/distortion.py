@@ -11,19 +11,31 @@ from ..signal import harmonic_amplitudes
 from .bands import noise_sigma
 
 
-def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3)
-              ) -> dict[int, float]:
+def _part(fr: np.ndarray, f_max: float) -> int:
+    """Samples of the sweep before its instantaneous frequency first passes ``f_max``."""
+    return int(np.searchsorted(np.maximum.accumulate(fr), f_max))
+
+
+def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3),
+              f_max: float | None = None) -> dict[int, float]:
     """RMS order amplitudes ``P_1`` and ``P_k`` (Eqs. 12-17) of a swept record, each ratio
     ``P_k / P_1`` over the part of the sweep where order ``k`` stays below 0.45 fs (so H3 is
-    measured even where the whole sweep only allows order 2). Returns ``{1: P_1 (whole
-    sweep), k: P_1(part) * ratio_k}``; empty without a sweep (random excitation)."""
+    measured even where the whole sweep only allows order 2) and below ``f_max`` (the
+    highest frequency the compared record holds, :func:`~sensfw.measure.bands.usable_limit`:
+    a record resampled from a lower rate has nothing above it, and its orders read there
+    would be the resampling filter's; both sides of a comparison take the same). Returns
+    ``{1: P_1, k: P_1(part) * ratio_k}``, ``P_1`` over the whole sweep or, with an
+    ``f_max`` below 0.45 fs, its part below ``f_max``; empty without a sweep (random
+    excitation)."""
     if sig.f_inst is None:
         return {}
     s = sig.sweep()
     x, fr = s.channel(channel), np.asarray(s.f_inst, float)
-    out = harmonic_amplitudes(x, s.fs, fr, harmonics=(1,))
+    top = 0.45 * s.fs if f_max is None else min(0.45 * s.fs, f_max)
+    n1 = len(fr) if top >= 0.45 * s.fs else _part(fr, top)
+    out = harmonic_amplitudes(x[:n1], s.fs, fr[:n1], harmonics=(1,))
     for k in orders:
-        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
+        n = _part(fr, top / k)
         if n < 0.1 * len(fr):
             continue
         part = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1, k))
@@ -33,7 +45,7 @@ def harmonics(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3)
 
 
 def harmonic_floor(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3),
-                   seed: int = 0) -> dict[int, float]:
+                   seed: int = 0, f_max: float | None = None) -> dict[int, float]:
     """Noise floor of each ratio ``P_k / P_1`` of :func:`harmonics`: the order amplitude
     that the record's output noise alone gives at order ``k``, over the same part of the
     sweep, divided by that part's ``P_1``.
@@ -50,9 +62,10 @@ def harmonic_floor(sig: Signals, channel: str, orders: tuple[int, ...] = (2, 3),
     s = sig.sweep()
     x, fr = s.channel(channel), np.asarray(s.f_inst, float)
     noise = sigma * np.random.default_rng(seed).standard_normal(len(x))
+    top = 0.45 * s.fs if f_max is None else min(0.45 * s.fs, f_max)
     out = {}
     for k in orders:
-        n = int(np.searchsorted(np.maximum.accumulate(fr), 0.45 * s.fs / k))
+        n = _part(fr, top / k)
         if n < 0.1 * len(fr):
             continue
         p1 = harmonic_amplitudes(x[:n], s.fs, fr[:n], harmonics=(1,))[1]

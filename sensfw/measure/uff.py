@@ -32,6 +32,34 @@ def _uff_label(rec: dict, key: str) -> str | None:
     return None if not v or v.upper() == "NONE" else v
 
 
+#: abscissa units a UFF58 record may carry, to seconds (time) or Hz (frequency)
+_TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3,
+               "msec": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6}
+_FREQ_UNITS = {"hz": 1.0, "1/s": 1.0, "khz": 1e3, "rad/s": 1 / (2 * np.pi),
+               "rpm": 1 / 60, "cpm": 1 / 60}
+
+
+def _abscissa(where: str, rec: dict, name: str, frf: bool) -> np.ndarray:
+    """The record's abscissa in s (a time record) or Hz (an FRF), from its unit label
+    (``abscissa_axis_units_lab``; none: s or Hz); a label of neither kind is refused
+    rather than read as s or Hz."""
+    x = np.asarray(rec["x"], float)
+    label = _uff_label(rec, "abscissa_axis_units_lab")
+    if label is None:
+        return x
+    units = _FREQ_UNITS if frf else _TIME_UNITS
+    inner = re.search(r"[\[(]\s*([^\])]+?)\s*[\])]", label)  # "Time (ms)", "f [Hz]"
+    unit = (inner.group(1) if inner else label).strip()
+    scale = units.get(unit.lower(), units.get(unit))
+    if scale is None and unit.lower() in ("time", "t", "frequency", "freq", "f"):
+        scale = 1.0  # a quantity named, no unit: the format's own (s, Hz)
+    if scale is None:
+        raise MeasurementError(where, f"abscissa in {label!r}: expected "
+                               + ("a frequency (Hz, kHz, rad/s, RPM)" if frf else
+                                  "a time (s, ms, us)"), name)
+    return x * scale
+
+
 def _is_frf(rec: dict) -> bool:
     """A UFF58 record is an FRF (func_type 4), or spectral (complex, or an abscissa in
     Hz), rather than a time series."""
@@ -89,7 +117,7 @@ def read_uff_levels(path: str | Path) -> list[Measurement]:
         columns, unit_map, t = {}, {}, None
         for rec in recs:
             name = _uff_name(where, rec)
-            x = np.asarray(rec["x"], float)
+            x = _abscissa(where, rec, name, frf=False)
             y = np.asarray(rec["data"], float)
             unit = _uff_label(rec, "ordinate_axis_units_lab")
             key = "force" if name.lower() in ("force", "excitation", "input") else name
@@ -134,7 +162,7 @@ def _uff_frfs(where: str, recs: list[dict], level, direction: str | None) -> Mea
             factor(where, "force", in_u, in_si)
         channels[name] = np.asarray(rec["data"], complex) * scale
         file_units[name], file_units["force"] = out_u or units[name], in_u
-        x = np.asarray(rec["x"], float)
+        x = _abscissa(where, rec, name, frf=True)
         if f is None:
             f = x
         elif len(x) != len(f) or np.max(np.abs(x - f)) > 1e-9 * max(1.0, abs(f[-1])):

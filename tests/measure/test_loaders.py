@@ -283,6 +283,10 @@ def test_a_record_sampled_slower_than_the_study_is_compared_on_its_own_band(tmp_
     study = two_dof_study()
     m = prepare(load(csv(tmp_path, slow, "slow.csv", level=1.0)), study)
     assert m.signals.fs == 20000 and any("fs / 2.56" in n for n in m.notes)
+    # the study's sweep seen up to the record's band: the rig drove the whole sweep, so
+    # the model is driven by the ideal one (the record, band-limited, would stop it early)
+    assert isinstance(m.drive, Chirp), m.notes
+    assert any("the record is the study's sweep" in n for n in m.notes)
     with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
         c = compare_measurements(study, [m], runner).levels[0]
     assert c.error_band == pytest.approx((50.0, 1562.5))
@@ -382,3 +386,93 @@ def test_a_drive_longer_than_the_studys_excitation_gets_a_longer_timeout():
     short = SteppedSine.at([100.0, 200.0], 0.1, 20000.0, 1.0)
     assert variant_spec(study, {}, short).timeout == 2.0
     assert variant_spec(study, {}, long).key() == variant_spec(two_dof_study(), {}, long).key()
+
+
+def test_a_slow_records_noise_and_harmonics_are_read_where_it_holds_lines(good):
+    """The 2-DOF response with a quadratic distortion and white noise, decimated to 4 kHz
+    and resampled to the study's 20 kHz as ``prepare`` does (``meta["recorded_fs"]``).
+
+    - Noise: over every bin of the resampled record the 5 % quantile sat in the empty stop
+      band above 2 kHz (nearly 0: a probe found "noise alone" 0.005 dB for 1.1 dB); over the
+      bins below fs / 2.56 it is the white noise of the same density at 20 kHz, the noise
+      added. Within 40 % (the local fit's residual on a linear record: 10 % above at the
+      study's rate, 30 % at the slow rate, where no pure-noise bins lie above the sweep).
+    - Harmonics: both sides of a comparison take the orders below the record's 1562.5 Hz;
+      there the slow record's order amplitudes are the full-rate record's to 1 % (on the
+      quick study a 5 kHz copy of a 20 kHz record read over the whole sweep, as before, put
+      the model's H2 and H3 20.6 and 34.6 dB above the record's)."""
+    from scipy.signal import decimate
+
+    from sensfw.measure.bands import noise_sigma, usable_limit
+    from sensfw.measure.checks import resample
+    from sensfw.measure.distortion import harmonics
+
+    a = good.channels["a1"]
+    sigma = 0.01 * float(np.std(a))
+    rng = np.random.default_rng(3)
+
+    def records(k):
+        y = a + k * a**2 / np.max(np.abs(a)) + sigma * rng.standard_normal(len(a))
+        fast = Signals(t=good.t, force=good.force, channels={"a1": y}, fs=good.fs,
+                       f_inst=EX.f_inst(good.t), sweep_end=EX.sweep_end)
+        slow = resample(Signals(t=good.t[::5], force=decimate(good.force, 5, ftype="fir"),
+                                channels={"a1": decimate(y, 5, ftype="fir")},
+                                fs=good.fs / 5), good.fs)
+        n = min(len(slow.force), len(good.t))
+        back = Signals(t=good.t[:n], force=slow.force[:n], channels={"a1": slow.channels["a1"][:n]},
+                       fs=good.fs, f_inst=EX.f_inst(good.t[:n]), meta=slow.meta,
+                       sweep_end=EX.sweep_end)
+        return fast, back
+
+    fast, back = records(0.0)
+    assert back.meta["recorded_fs"] == pytest.approx(4000.0)
+    assert usable_limit(back) == pytest.approx(1562.5) and usable_limit(fast) == 10000.0
+    assert sigma <= noise_sigma(back, "a1") <= 1.4 * sigma
+    assert sigma <= noise_sigma(fast, "a1") <= 1.4 * sigma
+    fast, back = records(0.05)
+    top = usable_limit(back)
+    hf, hb = harmonics(fast, "a1", f_max=top), harmonics(back, "a1", f_max=top)
+    for k in (1, 2, 3):
+        assert hb[k] == pytest.approx(hf[k], rel=0.01), k
+
+
+def test_a_record_too_slow_for_the_studys_band_names_its_time_channel(tmp_path, good):
+    """A time column in ms read as s (fs 20 Hz) or a 100 Hz logger: no line of the study's
+    50-2000 Hz; an error naming the time channel (it was scipy's 'Wn[0] must be less than
+    Wn[1]' from the sweep estimate's filter)."""
+    study = two_dof_study()
+    n = len(good.t)
+    ms = Signals(t=good.t * 1e3, force=good.force, channels={"a1": good.channels["a1"]},
+                 fs=good.fs / 1e3)
+    with pytest.raises(MeasurementError, match=r"ms\.csv, channel 'time': sampled at 20 Hz.*"
+                                               r"'time \[ms\]'"):
+        prepare(load(csv(tmp_path, ms, "ms.csv")), study)
+    slow = Signals(t=good.t[:n:200], force=good.force[::200],
+                   channels={"a1": good.channels["a1"][::200]}, fs=good.fs / 200)
+    with pytest.raises(MeasurementError, match=r"channel 'time': sampled at 100 Hz"):
+        prepare(load(csv(tmp_path, slow, "s100.csv")), study)
+
+
+def test_uff58_abscissa_units_are_read(tmp_path, good):
+    """A UFF58 time record whose abscissa is labelled ms (values in ms) reads at 20 kHz,
+    not 20 Hz; an abscissa label of no time unit is refused naming the channel."""
+    import pyuff
+
+    def write(path, label, scale):
+        uff = pyuff.UFF(str(path))
+        for name, y, unit in (("force", good.force, "N"), ("a1", good.channels["a1"], "m/s^2")):
+            uff.write_sets(pyuff.prepare_58(
+                func_type=1, id1=name, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1, data=y,
+                x=good.t * scale, abscissa_spacing=1, abscissa_min=0.0,
+                abscissa_inc=scale / good.fs, abscissa_spec_data_type=17,
+                ordinate_spec_data_type=12 if name == "a1" else 13, orddenom_spec_data_type=13,
+                ordinate_axis_units_lab=unit, abscissa_axis_units_lab=label, binary=0),
+                mode="add")
+        return path
+
+    for label in ("ms", "Time (ms)", "time [ms]"):
+        m = load(write(tmp_path / f"{label[:2]}{len(label)}.uff", label, 1e3))
+        assert m.fs == pytest.approx(good.fs, rel=1e-6), label
+    assert load(write(tmp_path / "s.uff", "s", 1.0)).fs == pytest.approx(good.fs, rel=1e-6)
+    with pytest.raises(MeasurementError, match=r"channel 'force': abscissa in 'Hz'"):
+        load(write(tmp_path / "hz.uff", "Hz", 1.0))
