@@ -52,6 +52,10 @@ class Effect(ABC):
     #: parameter values at which the effect vanishes exactly (the model without it): a
     #: calibration that starts there can only end better than the model without the effect
     neutral: ClassVar[dict[str, float]] = {}
+    #: raised when the effect's physics changes: it enters the runs' hash
+    #: (:meth:`sensfw.models.Model.effect_options`), so a run store never hands back a run
+    #: of the former physics
+    revision: ClassVar[int] = 0
 
     class Options(PluginOptions):
         """An effect's one option, where it attaches (:mod:`sensfw.options`)."""

@@ -196,8 +196,12 @@ class Model(ABC):
         return ParameterSet([*own.values(), *extra]) if extra else own
 
     def effect_options(self) -> dict:
-        """``{"effects": [spec, ...]}`` for :meth:`options` (empty without effects)."""
-        return {"effects": [e.spec() for e in self.effects]} if self.effects else {}
+        """``{"effects": [spec, ...]}`` for :meth:`options` (empty without effects); an
+        effect whose physics was revised (:attr:`Effect.revision`) carries its revision, so
+        runs of its former physics are not reused."""
+        return {"effects": [{**e.spec(), **({"revision": e.revision}
+                                            if getattr(e, "revision", 0) else {})}
+                            for e in self.effects]} if self.effects else {}
 
     def apply_effects(self, hooks: Hooks, p: Mapping[str, float]) -> None:
         """Apply every effect at its place through ``hooks`` (the model's assembly) for the

@@ -125,9 +125,14 @@ def test_added_mass_and_damping_change_the_matrices_by_what_they_add():
     M0, _, _ = m0.linear_matrices(NOMINAL)
     M1, _, _ = mass.linear_matrices(p)
     x = m0.geometry.x_force
-    # C's coordinates are 3..5: m on x and y, m x^2 on the rotation (Steiner)
-    np.testing.assert_allclose(np.diag(M1 - M0), [0, 0, 0, 0.05, 0.05, 0.05 * x * x, 0, 0],
-                               atol=1e-15)
+    # C's coordinates are 3..5, now of the centre of mass of C and the point mass together:
+    # m on x and y, and on the rotation the pair's inertia about their common centre, which
+    # lies m x / (M + m) along: M (m x / (M + m))^2 + m (M x / (M + m))^2 = m x^2 M / (M + m)
+    # (parallel axes); the mass matrix stays diagonal in these coordinates
+    M, m = M0[3, 3], 0.05
+    np.testing.assert_allclose(np.diag(M1 - M0),
+                               [0, 0, 0, m, m, m * x * x * M / (M + m), 0, 0], atol=1e-15)
+    np.testing.assert_allclose(M1 - np.diag(np.diag(M1)), 0.0, atol=0)
     damp = ShaftAssembly(effects=[{"name": "damping", "attach": "slide_bearing_1"}])
     p = full(damp, extra_damping=0.2)
     q0 = damp.equilibrium(p)

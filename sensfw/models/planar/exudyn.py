@@ -64,16 +64,21 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
                                                                 mass=b.mass))
         reference[b.name] = b.ref
 
+    def local(body, r):  # a body point relative to its present centre of mass
+        return index.bodies[body].local(r) if body in index.bodies else r
+
     def marker(body, r):
+        x, y = local(body, r)
         return mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=bodies[body],
-                                                   localPosition=[r[0], r[1], 0.0]))
+                                                   localPosition=[x, y, 0.0]))
 
     keep: list = []
     for ln in mech.links:
         m0, m1 = marker(ln.body0, ln.r0), marker(ln.body1, ln.r1)
         # reference offset between the two points, removed inside the law
         # (and, for a link centred on the static state, its displacement there)
-        off = [reference[ln.body1][i] + ln.r1[i] - reference[ln.body0][i] - ln.r0[i]
+        r0, r1 = local(ln.body0, ln.r0), local(ln.body1, ln.r1)
+        off = [reference[ln.body1][i] + r1[i] - reference[ln.body0][i] - r0[i]
                + (ln.offset[i] if ln.offset else 0.0) for i in (0, 1)]
         co = mbs.AddObject(ei.ObjectConnectorCartesianSpringDamper(
             markerNumbers=[m0, m1], stiffness=[0, 0, 0], damping=[0, 0, 0],
@@ -91,8 +96,9 @@ def build(mech: Mechanism, q0: np.ndarray, contact, ops, loads: Sequence[LoadSpe
                                    "loadVectorUserFunction", user_functions))
     handles = {}
     for name, body, pos, comp in sensors:
+        x, y = local(body, pos)
         s = mbs.AddSensor(ei.SensorBody(
-            bodyNumber=bodies[body], localPosition=[pos[0], pos[1], 0], storeInternal=True,
+            bodyNumber=bodies[body], localPosition=[x, y, 0], storeInternal=True,
             outputVariableType=exu.OutputVariableType.Acceleration))
         handles[name] = (s, comp)
     mbs.Assemble()
