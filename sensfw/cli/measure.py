@@ -141,13 +141,12 @@ def compare(
     levels. Records: time data (sweeps, random, stepped sines) or FRFs alone."""
     from ..measure.compare import compare_measurements
     from ..measure.lines import jump_text
-    from ..measure.prepared import load_measurements
     from ..report.measure import write_comparison
     from ..study import Study
 
     study = Study.load(study_file)
     band = _band_option(error_band, "--error-band")
-    meas = load_measurements(study, [str(m) for m in measured])
+    meas = _loaded(study, measured)
     for m in meas:
         for note in m.notes:
             if "not the study's" in note or "FRF-only" in note:
@@ -212,12 +211,11 @@ def diagnose(
     with each candidate (global calibrations, or local with --local); rank by BIC and
     held-out levels."""
     from ..measure.diagnose import diagnose as run_diagnose
-    from ..measure.prepared import load_measurements
     from ..report.diagnosis import write_diagnosis
     from ..study import Study
 
     study = Study.load(study_file)
-    meas = load_measurements(study, [str(m) for m in measured])
+    meas = _loaded(study, measured)
     t0 = time.perf_counter()
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         names = [c.strip() for c in candidates.split(",")] if candidates else None
@@ -277,12 +275,11 @@ def augment(
     augmented study and the error trajectory per level."""
     from ..measure.augment import augment as run_augment
     from ..measure.augment import diagnosed_start
-    from ..measure.prepared import load_measurements
     from ..report.diagnosis import write_augmentation
     from ..study import Study
 
     study = Study.load(study_file)
-    meas = load_measurements(study, [str(m) for m in measured])
+    meas = _loaded(study, measured)
     name, _, attach = effect.partition("@")
     start = base_start = None
     read_also = []
@@ -323,13 +320,12 @@ def calibrate(
 ) -> None:
     """Calibrate the study's base parameters (its calibration section) against measurements:
     values with intervals, the error per level before and after, and the calibrated study."""
-    from ..measure.prepared import load_measurements
     from ..measure.recalibrate import recalibrate
     from ..report.diagnosis import write_calibration
     from ..study import Study
 
     study = Study.load(study_file)
-    meas = load_measurements(study, [str(m) for m in measured])
+    meas = _loaded(study, measured)
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
         result = recalibrate(study, meas, runner, budget=budget, global_phase=global_search,
                              study_text=study_file.read_text(encoding="utf-8"), log=say)
@@ -343,6 +339,18 @@ def calibrate(
     for n in result.get("notes", []):
         say(f"notice: {n}", style="yellow")
     out.print(f"-> {out_dir}/study.toml, {out_dir}/calibrate.json, {out_dir}/report.html")
+
+
+def _loaded(study, measured) -> list:
+    """The measurements, loaded and prepared; what each warns of printed (a level the
+    record contradicts, a record that sweeps little of the study's band)."""
+    from ..measure.prepared import load_measurements
+
+    meas = load_measurements(study, [str(m) for m in measured])
+    for m in meas:
+        for w in getattr(m, "warnings", ()):
+            say(f"warning: {m.file}: {w}", style="yellow")
+    return meas
 
 
 def per_record(step: dict) -> str:

@@ -61,6 +61,10 @@ def recorded_band(meas: Measurement, band: tuple[float, float], study_fs: float
     return band[0], min(band[1], fs / ALIAS_FREE)
 
 
+#: a declared level (sidecar, folder name) further than this from the record's sweep
+#: amplitude is named (the LMS reader's rule for its folder names)
+LEVEL_TOLERANCE = 0.05
+
 #: largest slow amplitude drift for which the ideal sweep stands for the applied force: a
 #: nonlinear model feels the drift (measured on the quick study at 0.45 N: a +-20 % drift
 #: driven by the ideal chirp left 1.9 dB FRF error against a 1.1 dB noise floor)
@@ -110,6 +114,11 @@ def check_channels(meas: Measurement, used: list[str]) -> None:
     """The excitation and the ``used`` channels (those the model computes too) neither
     clipped nor silent (a constant response: a dead sensor or cable). Channels the model
     does not have (a temperature, a torque) are not read."""
+    force = meas.signals.force
+    if np.ptp(force) == 0 and force[0] != 0:  # all zero: "silent", by the sweep estimate
+        raise MeasurementError(meas.file, "the excitation is constant "
+                               f"({force[0]:.4g}) over the whole record: no excitation (a "
+                               "dead transducer or amplifier, or the wrong column?)", "force")
     for name in used:
         x = meas.signals.channels[name]
         if np.ptp(x) == 0:
@@ -334,6 +343,10 @@ def prepare(meas: Measurement, study) -> Measurement:
         raise MeasurementError(meas.file, "the excitation channel is silent", "force")
     meas.sweep = est
     level = meas.level if meas.level is not None else est.amplitude
+    # a declared level the record contradicts: it drives the ideal sweep (below), so a
+    # wrong one drives the model too hard or too soft (a measured drive only labels it)
+    contradicted = (meas.level is not None and est.is_sweep and est.amplitude > 0
+                    and abs(est.amplitude / meas.level - 1) > LEVEL_TOLERANCE)
     if meas.level is None:
         meas.notes.append(f"excitation level estimated from the record: {level:.4g} "
                           f"{meas.input_unit}")
@@ -350,6 +363,16 @@ def prepare(meas: Measurement, study) -> Measurement:
         if mismatch and study.drive == "auto":
             meas.notes.append(f"the excitation is not the study's ({mismatch}): estimated "
                               f"{describe(est)}; the model is driven by the measured record")
+        elif (est.is_sweep and hasattr(ex, "f1")
+              and (est.f1 < ex.f0 or est.f0 > ex.f1
+                   or min(est.f1, ex.f1) - max(est.f0, ex.f0)
+                   < 0.5 * (ex.f1 - ex.f0))):
+            meas.warnings.append(f"the record sweeps {est.f0:.4g} -> {est.f1:.4g} Hz, less than "
+                                 f"half of the study's band {ex.f0:g}-{ex.f1:g} Hz: the model "
+                                 "is driven by the record, but the comparison sees little of "
+                                 "the band (the export's sample rate?)")
+            meas.notes.append(meas.warnings[-1])
+            meas.notes.append(f"the model is driven by the measured record ({describe(est)})")
         else:
             meas.notes.append(f"the model is driven by the measured record ({describe(est)})")
         if sig.fs < ex.fs * (1 - 1e-6):  # the model's output sampled as slowly would alias
@@ -368,6 +391,12 @@ def prepare(meas: Measurement, study) -> Measurement:
         raise MeasurementError(meas.file, f"record is {length:.4g} s long after the sweep's "
                                           f"start, shorter than the {ex.duration:g} s sweep",
                                "force")
+    if contradicted:
+        meas.warnings.append(f"the declared level {meas.level:g} {meas.input_unit} is not the "
+                             f"record's sweep amplitude, {est.amplitude:.4g}: the model is "
+                             f"driven at the declared level (leave the level out to use the "
+                             "record's)")
+        meas.notes.append(meas.warnings[-1])
     meas.drive = ex.with_amplitude(float(f"{meas.level:.4g}"))
     meas.signals = align_to_ideal(meas, ex, est)
     meas.notes.append(f"the record is the study's sweep ({describe(est)}); the model is "

@@ -45,13 +45,27 @@ def read_csv(path: str | Path) -> Measurement:
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if len(lines) < 3:
         raise MeasurementError(file, "needs a header row and at least two data rows")
-    delim = ";" if lines[0].count(";") > lines[0].count(",") else ","
-    header = [h.strip().strip('"').strip("'").strip() for h in lines[0].split(delim)]
+    first = lines[0]
+    delim = max(("\t", ";", ","), key=first.count) if any(c in first for c in "\t;,") else ","
+    header = [h.strip().strip('"').strip("'").strip() for h in first.split(delim)]
+    if len(header) > 1 and header[-1] == "" and all(
+            ln.rstrip().endswith(delim) for ln in lines[:20]):
+        # a separator at the end of every line (some exports): no column there
+        header = header[:-1]
+        lines = [ln.rstrip()[:-1] for ln in lines]
+    if all(_is_number(h) for h in header):
+        raise MeasurementError(file, "the first row holds numbers: no header row; name the "
+                               "columns, e.g. 'time [s],force [N],a1 [m/s^2]'")
+    if delim in ";\t" and any(_is_number(v.strip().replace(",", ".")) and "," in v
+                              for ln in lines[1:6] for v in ln.split(delim)):
+        raise MeasurementError(file, "decimal commas (e.g. '0,5'): write numbers with a "
+                               "decimal point, or save the sheet as CSV in an English locale")
     names, header_units = [], {}
     for h in header:
         m = _HEADER.match(h)
         if not m:
-            raise MeasurementError(file, f"cannot read column header {h!r}")
+            raise MeasurementError(file, f"cannot read column header {h!r} (a name, its unit "
+                                   "in square brackets: 'a1 [m/s^2]')")
         name = m.group(1).strip()
         if name.lower() in ("time", "force"):  # "Time [s]", "FORCE [N]"
             name = name.lower()
@@ -69,12 +83,25 @@ def read_csv(path: str | Path) -> Measurement:
     if data.shape[1] != len(names):
         raise MeasurementError(file, f"{data.shape[1]} data columns but {len(names)} headers")
     side = sidecar(path)
+    for name, unit in side.get("units", {}).items():
+        said = header_units.get(name)
+        if said is not None and said != unit:
+            raise MeasurementError(file, f"the header says {said!r}, the sidecar "
+                                   f"{path.with_suffix('.toml').name} says {unit!r}", name)
     unit_map = {**header_units, **side.get("units", {})}
     columns = {}
     for i, name in enumerate(names):
         unit = unit_map.get(name)
         columns[name] = data[:, i] * factor(file, name, unit, target(name, unit))
     return assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def load(path: str | Path) -> Measurement:

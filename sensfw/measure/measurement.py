@@ -116,6 +116,9 @@ class Measurement:
     units: dict[str, str] = field(default_factory=dict)
     level: float | None = None  # excitation amplitude (N, or V for a voltage) if known
     notes: list[str] = field(default_factory=list)
+    #: what the user must see before trusting a comparison (a declared level the record
+    #: contradicts, a record that is not the study's sweep): every command prints these
+    warnings: list[str] = field(default_factory=list)
     sweep: Any = None
     drive: Any = None
 

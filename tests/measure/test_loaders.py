@@ -476,3 +476,60 @@ def test_uff58_abscissa_units_are_read(tmp_path, good):
     assert load(write(tmp_path / "s.uff", "s", 1.0)).fs == pytest.approx(good.fs, rel=1e-6)
     with pytest.raises(MeasurementError, match=r"channel 'force': abscissa in 'Hz'"):
         load(write(tmp_path / "hz.uff", "Hz", 1.0))
+
+
+def test_what_a_csv_says_against_itself_or_the_record_is_named(tmp_path, good):
+    """A sidecar's level three times the record's sweep amplitude drives the ideal sweep
+    three times too hard: a warning names both (the LMS reader's 5 % rule); sidecar units
+    that contradict the header are refused naming the channel (the sidecar won, silently:
+    19.8 dB on the quick study's own record); a record exported at half its rate sweeps
+    25-1000 Hz, less than half of the study's band: with ``drive = "measured"`` it is
+    driven as it is, with a warning."""
+    study = two_dof_study()
+    f = csv(tmp_path, good, "lv.csv")
+    f.with_suffix(".toml").write_text("level = 3.0\n")
+    m = prepare(load(f), study)
+    assert m.drive.amplitude == 3.0
+    assert any("declared level 3 N is not the record's sweep amplitude, 1" in w
+               for w in m.warnings), m.warnings
+    assert not prepare(load(csv(tmp_path, good, "ok.csv", level=1.0)), study).warnings
+    f = csv(tmp_path, good, "u.csv")
+    f.with_suffix(".toml").write_text('[units]\na1 = "g"\n')
+    with pytest.raises(MeasurementError, match=r"u\.csv, channel 'a1': the header says "
+                                               r"'m/s\^2', the sidecar u\.toml says 'g'"):
+        load(f)
+    half = Signals(t=good.t * 2, force=good.force, channels={"a1": good.channels["a1"]},
+                   fs=good.fs / 2)
+    m = prepare(load(csv(tmp_path, half, "half.csv")), two_dof_study(drive="measured"))
+    assert any("less than half of the study's band 50-2000 Hz" in w for w in m.warnings)
+
+
+def test_common_csv_shapes_are_read_or_named(tmp_path, good):
+    """Tab separators and a separator at the end of every line are read; a file without a
+    header row, decimal commas and a constant force are refused saying what they are (they
+    gave 'duplicate column names', a NaN in the time column and 'clipped')."""
+    f = csv(tmp_path, good, "c.csv")
+    rows = f.read_text().splitlines()
+    ref = load(f)
+    tab = tmp_path / "tab.csv"
+    tab.write_text("\n".join(r.replace(",", "\t") for r in rows) + "\n")
+    trailing = tmp_path / "trail.csv"
+    trailing.write_text("\n".join(r + "," for r in rows) + "\n")
+    for g in (tab, trailing):
+        m = load(g)
+        np.testing.assert_array_equal(m.signals.channels["a1"], ref.signals.channels["a1"])
+    bare = tmp_path / "bare.csv"
+    bare.write_text("\n".join(rows[1:]) + "\n")
+    with pytest.raises(MeasurementError, match="the first row holds numbers: no header row"):
+        load(bare)
+    comma = tmp_path / "comma.csv"
+    comma.write_text("\n".join([rows[0].replace(",", ";")]
+                               + [";".join(v.replace(".", ",") for v in r.split(","))
+                                  for r in rows[1:]]) + "\n")
+    with pytest.raises(MeasurementError, match="decimal commas"):
+        load(comma)
+    flat = Signals(t=good.t, force=np.full_like(good.force, 0.05), channels=dict(good.channels),
+                   fs=good.fs)
+    with pytest.raises(MeasurementError, match=r"channel 'force': the excitation is constant "
+                                               r"\(0\.05\)"):
+        prepare(load(csv(tmp_path, flat, "flat.csv")), two_dof_study())
