@@ -36,13 +36,19 @@ import numpy as np
 from .errors import SignalError
 
 
-def _check_sweep(f0: float, f1: float, duration: float, fs: float) -> None:
+def _check_sweep(f0: float, f1: float, duration: float, fs: float, tail: float = 0.0,
+                 kind: str = "chirp") -> None:
     if not (f0 > 0 and f1 > f0):
         raise SignalError(f"chirp needs 0 < f0 < f1, got f0={f0}, f1={f1}")
     if not duration > 0:
         raise SignalError(f"chirp duration must be > 0, got {duration}")
     if not fs > 2 * f1:
         raise SignalError(f"sample rate fs={fs} Hz must exceed 2*f1={2 * f1} Hz (Nyquist)")
+    if not tail >= 0:
+        raise SignalError(f"{kind} tail must be >= 0, got {tail}")
+    if round(duration * fs) < 2:
+        raise SignalError(f"{kind} duration {duration:g} s holds {round(duration * fs)} "
+                          f"sample(s) at fs={fs:g} Hz: it needs at least two")
 
 
 def chirp_phase(t: np.ndarray, f0: float, f1: float, duration: float) -> np.ndarray:
@@ -160,9 +166,7 @@ class Sweep(Excitation):
     signal_unit: str = "N"
 
     def __post_init__(self) -> None:
-        _check_sweep(self.f0, self.f1, self.duration, self.fs)
-        if self.tail < 0:
-            raise SignalError(f"{self.kind} tail must be >= 0, got {self.tail}")
+        _check_sweep(self.f0, self.f1, self.duration, self.fs, self.tail, self.kind)
 
     @abstractmethod
     def phase(self, t: np.ndarray) -> np.ndarray:
@@ -265,9 +269,13 @@ class SteppedSine(Excitation):
     direction: str = "up"
 
     def __post_init__(self) -> None:
-        _check_sweep(self.f0, self.f1, self.duration, self.fs)
+        _check_sweep(self.f0, self.f1, self.duration, self.fs, self.tail, self.kind)
         if self.steps < 1:
             raise SignalError(f"stepped sine needs at least one step, got {self.steps}")
+        if self.duration / self.steps < 2 / self.fs:
+            raise SignalError(f"stepped sine of {self.steps} steps in {self.duration:g} s "
+                              f"dwells {self.duration / self.steps:.3g} s per step, less than "
+                              f"two samples at fs={self.fs:g} Hz")
         if self.direction not in ("up", "down"):
             raise SignalError(f"stepped sine direction must be 'up' or 'down', got "
                               f"{self.direction!r}")
@@ -343,7 +351,14 @@ class RandomForce(Excitation):
     seed: int = 0
 
     def __post_init__(self) -> None:
-        _check_sweep(self.f0, self.f1, self.duration, self.fs)
+        _check_sweep(self.f0, self.f1, self.duration, self.fs, self.tail, self.kind)
+        n = round(self.duration * self.fs)
+        f = np.fft.rfftfreq(n, 1 / self.fs)
+        if not np.any((f >= self.f0) & (f <= self.f1)):
+            raise SignalError(f"random band [{self.f0:g}, {self.f1:g}] Hz holds no frequency "
+                              f"line of a {self.duration:g} s record (lines "
+                              f"{self.fs / n:.4g} Hz apart): widen the band or lengthen the "
+                              "record")
 
     def _record(self) -> np.ndarray:
         n = round(self.duration * self.fs)

@@ -88,7 +88,16 @@ def options_model(cls) -> type[PluginOptions]:
     keyword arguments, untyped."""
     declared = getattr(cls, "Options", None)
     if isinstance(declared, type) and issubclass(declared, BaseModel):
-        return declared
+        if "Options" in vars(cls) or _takes_keywords(cls):
+            return declared
+        # inherited (an effect without its own: Effect.Options, attach only): the
+        # constructor's other keyword arguments are options too, untyped
+        extra = {k: v for k, v in _signature_defaults(cls).items()
+                 if k not in declared.model_fields}
+        if not extra:
+            return declared
+        return create_model(f"{cls.__name__}Options", __base__=declared,
+                            **{k: (Any, v) for k, v in extra.items()})
     fields = dict(getattr(cls, "defaults", None) or {}) if _takes_keywords(cls) else \
         _signature_defaults(cls)
     return create_model(f"{cls.__name__}Options", __base__=PluginOptions,

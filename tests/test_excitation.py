@@ -46,3 +46,25 @@ def test_chirp_object_with_tail():
         Chirp(50, 5000, 1.0, 8000)
     with pytest.raises(SignalError, match="0 < f0 < f1"):
         Chirp(500, 50, 1.0, 8000)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"kind": "random", "tail": -0.05}, r"random tail must be >= 0"),
+    ({"kind": "stepped_sine", "tail": -0.1}, r"stepped_sine tail must be >= 0"),
+    ({"kind": "log_chirp", "duration": 1e-5}, r"duration 1e-05 s holds 0 sample\(s\)"),
+    ({"kind": "stepped_sine", "steps": 100000, "duration": 0.05},
+     r"dwells 5e-07 s per step, less than two samples"),
+    ({"kind": "random", "f0": 1010.0, "f1": 1020.0, "duration": 0.01},
+     r"random band \[1010, 1020\] Hz holds no frequency line of a 0.01 s record \(lines "
+     r"100 Hz apart\)"),
+])
+def test_excitations_that_cannot_be_made_are_refused(kwargs, message):
+    """Each of these was accepted: a negative tail cut a stepped sine's last steps (or
+    crashed a random one), a sweep of no sample gave a zero force (or a division by zero in
+    the FRF scorer's check), a random band between two lines a NaN force reported as the
+    model diverging."""
+    from sensfw.excitation import make_excitation
+
+    spec = {"f0": 50.0, "f1": 5000.0, "duration": 0.25, "fs": 20000.0, **kwargs}
+    with pytest.raises(SignalError, match=message):
+        make_excitation(spec)

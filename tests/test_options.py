@@ -98,3 +98,28 @@ def test_an_option_error_names_every_problem():
     assert [p for p, _ in info.value.problems] == ["colour", "trajectories", "levels"]
     assert info.value.option == "colour"
     assert str(info.value).startswith("design 'morris': colour: unknown option")
+
+
+def test_an_effect_without_its_own_options_takes_its_constructors():
+    """The README: a plugin without ``Options`` takes its constructor's keyword arguments
+    (untyped). An effect inherits ``Effect.Options`` (attach only), which hid them: a
+    study's ``power = 2.0`` was 'unknown option; known: attach'. And an option at other
+    than its default enters the effect's spec, so the runs' hash: two powers are two runs."""
+    from sensfw.effects import Effect
+
+    class Scaled(Effect):
+        name = "scaled_test"
+        fits = ("contact",)
+
+        def __init__(self, attach=None, power=1.0):
+            super().__init__(attach)
+            self.power = float(power)
+
+        def apply(self, place, hooks, p):
+            pass
+
+    assert option_problems(Scaled, {"attach": "x", "power": 2.0}) == []
+    assert option_problems(Scaled, {"pwer": 2.0}) == [
+        ("pwer", "unknown option; known: attach, power")]
+    assert Scaled("x", power=2.0).spec() == {"name": "scaled_test", "attach": "x", "power": 2.0}
+    assert Scaled("x").spec() == {"name": "scaled_test", "attach": "x"}

@@ -78,6 +78,9 @@ def simulate(
     for option, value in (("--noise", noise), ("--drift", drift), ("--delay", delay)):
         if not value >= 0:
             raise SensfwError(f"{option} {value!r}: must be >= 0")
+    if not drift < 1:
+        raise SensfwError(f"--drift {drift!r}: must be below 1 (a fraction of the level; at "
+                          "1 or more the excitation's envelope passes through zero)")
     if channel_gain is not None and not channel_gain > 0:
         raise SensfwError(f"--channel-gain {channel_gain!r}: a shaker gain in N/V must be "
                           "positive")

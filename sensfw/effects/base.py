@@ -19,7 +19,7 @@ from typing import ClassVar
 from pydantic import Field
 
 from ..models.places import Hooks, Place, make_effect  # noqa: F401  (re-exported)
-from ..options import PluginOptions, Str
+from ..options import PluginOptions, Str, option_defaults, options_model
 from ..params import Parameter
 
 #: Amplitude-dependence classes of a nonlinear structure's response (Kerschen, Worden,
@@ -91,9 +91,17 @@ class Effect(ABC):
         return [{**nominal, lead.name: start + f * (lead.max - start)} for f in (0.25, 0.5, 1.0)]
 
     def spec(self) -> dict:
+        """Name, place and every declared option the instance holds at other than its
+        default (they enter the runs' hash: an effect at another option is another run)."""
         out = {"name": self.name}
         if self.attach is not None:
             out["attach"] = self.attach
+        defaults = option_defaults(type(self))
+        for k in options_model(type(self)).model_fields:
+            if k != "attach" and hasattr(self, k):
+                v = getattr(self, k)
+                if k not in defaults or v != defaults[k]:
+                    out[k] = v
         return out
 
     def __repr__(self) -> str:

@@ -78,7 +78,12 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
         if given:
             res.evaluate(None, [{**nominal, **given}], "base start")
     # from a diagnosis's values: refine only (its global search found them)
-    h0.fit = search(searches[0], h0, int(0.35 * budget) // n_levels,
+    h0_points = int(0.35 * budget) // n_levels
+    if h0_points < 2 * (len(base) + 1):
+        log(f"notice: a budget of {budget} leaves the base variables {h0_points} points at "
+            f"{n_levels} level(s), fewer than a design and a local search need (about "
+            f"{2 * (len(base) + 1)}; default budget {default_budget(n_levels)})")
+    h0.fit = search(searches[0], h0, h0_points,
                     {"q": q, "local": local, **(LOCAL_ONLY if base_start is not None else {})})
     widen_for_roughness(res, h0.fit, log)
     h = Hypothesis(eff, eff.attach, base + Coordinates.of(None, eff.parameters()))
@@ -102,11 +107,16 @@ def augment(study: Study, measurements: Sequence[Measurement], runner: Runner, e
             raise SensfwError(f"the model with {h.name} failed at every probe: "
                               f"{res.failures.get(f'probes {h.name}', '?')}")
     left = (budget - res.n_simulations) // n_levels
-    log(f"calibrating {h.name} jointly with {', '.join(names)} ({left} points)")
+    points = max(left, 2 * h.k + 4)
+    if points > left:
+        h.notes.append(f"the budget of {budget} simulations left {max(left, 0)} points for "
+                       f"the joint calibration of {h.k} parameters; it ran the least a "
+                       f"search needs, {points} ({points * n_levels} simulations)")
+        log(f"notice: {h.notes[-1]}")
+    log(f"calibrating {h.name} jointly with {', '.join(names)} ({points} points)")
     design = LOCAL_ONLY if start is not None else {"design_box": _around(h0, h),
                                                      "n_design": len(h.own) + 1}
-    h.fit = search(searches[1], h, max(left, 2 * h.k + 4),
-                   {"q": q, "local": local, **design})
+    h.fit = search(searches[1], h, points, {"q": q, "local": local, **design})
     steps = [("nominal model", None, nominal), ("base recalibrated", None, h0.fit.values),
              ("effect added", h.effects, added), ("jointly calibrated", h.effects,
                                                   h.fit.values)]

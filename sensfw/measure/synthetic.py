@@ -69,6 +69,10 @@ class Rig:
         for name in ("noise", "drift", "delay"):
             if not getattr(self, name) >= 0:
                 raise SensfwError(f"rig {name} must be >= 0, got {getattr(self, name)!r}")
+        if not self.drift < 1:
+            raise SensfwError(f"rig drift must be below 1 (a fraction of the level), got "
+                              f"{self.drift!r}: at 1 or more the excitation's envelope "
+                              "passes through zero and inverts")
         if self.gain is not None and not self.gain > 0:
             raise SensfwError(f"rig gain (N/V) must be positive, got {self.gain!r}")
 
@@ -151,6 +155,10 @@ def synthesize(study: Study, sets: Mapping[str, float] | None = None,
     ex = excitation_of(study, excitation, amplitude)
     level = ex.amplitude  # in the recorded channel's unit
     if ex.unit != "N":  # a voltage study: the rig records the voltage, the shaker's gain
+        if rig.gain is not None:
+            raise SensfwError(f"the study drives a voltage ({ex.unit}): the shaker's gain is "
+                              "its parameter excitation_gain; set it with --set "
+                              "excitation_gain=..., not --channel-gain")
         gain = study.parameters["excitation_gain"].check(gain) if gain is not None else None
         rig = replace(rig, gain=gain or study.parameters["excitation_gain"].nominal)
         ex = ex.scaled(rig.gain)

@@ -238,3 +238,19 @@ def test_simulate_refuses_rig_settings_that_cannot_be(cli, tmp_path):
         proc = cli("simulate", study, *out, *args)
         assert proc.returncode == 2 and message in proc.stderr, (args, proc.stderr)
         assert "Traceback" not in proc.stderr
+
+
+def test_a_voltage_studys_gain_is_its_parameter_and_drift_stays_below_one():
+    """``simulate --channel-gain`` on a study that drives a voltage (the beam's) was
+    dropped without a word (byte-identical records): refused, naming the parameter that
+    sets it. A drift of 1 or more turns the envelope through zero: refused."""
+    from pathlib import Path
+
+    from sensfw.errors import SensfwError
+    from sensfw.study import Study
+
+    beam = Study.load(Path(__file__).parents[2] / "studies" / "bert.toml")
+    with pytest.raises(SensfwError, match=r"drives a voltage \(V\).*--set excitation_gain"):
+        synthesize(beam, rig=Rig(gain=2.0))
+    with pytest.raises(SensfwError, match="rig drift must be below 1"):
+        Rig(drift=1.0)
