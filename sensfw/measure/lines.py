@@ -110,14 +110,18 @@ def frf_drive(meas: Measurement, study) -> SteppedSine:
     direction = rec.direction or "up"
     if rec.direction is None:
         meas.notes.append("the record states no sweep direction: the model steps upwards")
-    every = len(rec.lines_in(ex.f0, ex.f1)) / len(lines)
+    every = round(len(rec.lines_in(ex.f0, ex.f1)) / len(lines))
+    by_decay = SETTLE_DECAYS * tau if tau else 0.0
+    why = (f"{SETTLE_DECAYS:g} x the decay time {tau:.3g} s of its slowest resonance"
+           if by_decay >= MIN_PERIODS / lines[0] else
+           f"{MIN_PERIODS:g} periods of its lowest line, {lines[0]:g} Hz"
+           + (f", more than {SETTLE_DECAYS:g} x the decay time {tau:.3g} s of its slowest "
+              "resonance" if tau else ""))
     meas.notes.append(
         f"FRF-only record: the model is driven by a stepped sine on {len(lines)} of its lines "
-        f"in {lines[0]:g}-{lines[-1]:g} Hz" + (f" (every {every:.0f}th)" if every > 1.5
-                                              else "")
-        + f", {dwell:.3g} s per step (half of it to settle"
-        + (f": {SETTLE_DECAYS:g} x the decay time {tau:.3g} s of its slowest resonance)"
-           if tau else ")") + f", at {level:g} {rec.units.get('force', 'N')}, {direction}")
+        f"in {lines[0]:g}-{lines[-1]:g} Hz" + (f" (one line in {every})" if every > 1 else "")
+        + f", {dwell:.3g} s per step (half of it to settle: {why})"
+        + f", at {level:g} {rec.units.get('force', 'N')}, {direction}")
     return SteppedSine.at(lines, dwell, ex.fs, float(level), direction=direction,
                           signal_unit=rec.units.get("force", "N"))
 

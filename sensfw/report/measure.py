@@ -203,10 +203,15 @@ def write_compare_report(study, result, path) -> Path:
         page.h2("Records and how the model was driven")
         for n in result.notes:
             page.p(n)
+    lined = [c for c in comparisons if c.stepped]
     page.figure(frf_overlay(comparisons, error_band=band),
-                "Measured (solid) and simulated (dashed) FRFs: Hv smoothed to 1/24 octave for "
-                "time records, the steady-state lines (markers) of stepped-sine and FRF-only "
-                "records.")
+                "Measured (solid) and simulated (dashed) FRFs: "
+                + ("Hv smoothed to 1/24 octave for time records" if len(lined) <
+                   len(comparisons) else "")
+                + ("; " if lined and len(lined) < len(comparisons) else "")
+                + ("the steady-state lines of stepped-sine and FRF-only records"
+                   + (" (markers)" if any(len(c.f) <= 120 for c in lined) else "")
+                   if lined else "") + ".")
     if any(c.bands for c in comparisons):
         page.figure(band_errors(comparisons), "Mean FRF difference per band.")
     stepped = [c for c in comparisons if c.stepped]

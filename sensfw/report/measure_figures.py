@@ -62,11 +62,13 @@ def band_errors(comparisons):
     ref = max(comparisons, key=lambda c: len(c.bands)) if comparisons else None
     centres = [b["centre_hz"] for b in ref.bands] if ref else []
     colors = plt.cm.tab10(np.arange(10))
+    bars = False
     for i, c in enumerate(comparisons):
         pos = {b["centre_hz"]: j for j, b in enumerate(ref.bands)}
         used = {b["centre_hz"] for b in c.used_bands}
         x = np.array([pos.get(b["centre_hz"], np.nan) for b in c.bands]) + i * width
         err = [b["noise_db"] or 0.0 for b in c.bands]
+        bars = bars or any(err)
         ax.bar(x, [b["mean_db"] for b in c.bands], width,
                yerr=err if any(err) else None, error_kw={"lw": 0.8, "capsize": 1.5},
                color=[colors[i % 10] if b["centre_hz"] in used else "0.8" for b in c.bands],
@@ -79,9 +81,10 @@ def band_errors(comparisons):
     ax.axhline(0, color="k", lw=0.8)
     ax.set_xlabel("band centre (Hz)")
     ax.set_ylabel("model - measured (dB)")
-    ax.set_title("Where the model fails: mean FRF difference per band (error bars: the "
-                 "measurement's standard error; grey: bands the measurement cannot speak "
-                 "for)", fontsize=9)
+    ax.set_title("Where the model fails: mean FRF difference per band ("
+                 + ("error bars: the measurement's standard error; " if bars else
+                    "no error bars: these records carry no standard error (FRFs alone); ")
+                 + "grey: bands the measurement cannot speak for)", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(True, axis="y", alpha=0.3)
     return fig
