@@ -355,3 +355,58 @@ def test_a_study_that_stops_at_a_stage_keeps_the_stages_before_it(tmp_path):
     again = load_result(tmp_path)
     assert [s.name for s in again.stages] == ["screen"] and again.stopped["stage"] == "doe"
     assert again.stages[0].selected == data["stages"][0]["selected"]
+
+
+def _children(pid: int) -> list[int]:
+    out = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout
+    return [int(x) for x in out.split()]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
+def test_a_run_stopped_by_a_signal_leaves_no_worker_behind(cli, tmp_path, sig):
+    """SIGTERM (``timeout``, ``kill``, a batch scheduler) and SIGKILL to the CLI alone, not
+    its process group: the workers, blocked on a result queue nobody read, and the
+    forkserver stayed for good (130 MB each). Now SIGTERM stops the run as Ctrl-C does
+    (exit 143, finished runs kept) and after either signal the forkserver's workers leave."""
+    out = tmp_path / "sig"
+    proc = subprocess.Popen([sys.executable, "-m", "sensfw", "run", str(QUICK), "--out",
+                             str(out), "--workers", "2", "--no-progress"], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    store = out / "runs"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        if store.exists() and len(list(store.glob("*.json"))) >= 2:
+            break
+        time.sleep(0.05)
+    servers = _children(proc.pid)
+    workers = [w for s in servers for w in _children(s)]
+    assert workers, "no pool workers found"
+    os.kill(proc.pid, sig)
+    code = proc.wait(timeout=60)
+    if sig == signal.SIGTERM:
+        assert code == 143
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and any(os.path.exists(f"/proc/{w}") and
+                                              "Z" not in open(f"/proc/{w}/stat").read().split()[2]
+                                              for w in workers):
+        time.sleep(0.2)
+    left = [w for w in workers if os.path.exists(f"/proc/{w}")
+            and open(f"/proc/{w}/stat").read().split()[2] != "Z"]
+    for p in left + servers:  # leave nothing behind whatever the outcome
+        try:
+            os.kill(p, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    assert not left, f"workers {left} still running 30 s after the CLI was stopped"
+
+
+def test_a_worker_count_below_one_is_refused():
+    """``--workers -1`` started no worker and waited for ever on their results."""
+    from typer.testing import CliRunner
+
+    from sensfw.cli import app
+
+    res = CliRunner().invoke(app, ["run", str(QUICK), "--workers", "-1", "--dry-run"])
+    assert res.exit_code == 2 and "--workers" in res.output

@@ -34,24 +34,39 @@ def say(text: str, style: str = "cyan") -> None:
 StudyFile = Annotated[Path, typer.Argument(help="study TOML file")]
 #: the output folder of a command (the default is the command's own)
 OutDir = Annotated[Path, typer.Option("--out", "-o")]
-Workers = Annotated[int | None, typer.Option(help="worker processes (default: cores)")]
+Workers = Annotated[int | None, typer.Option(min=1, help="worker processes (default: "
+                                                          "cores)")]
 Backend = Annotated[str | None, typer.Option(help="serial | processes | dask")]
 Scheduler = Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")]
 ShowProgress = Annotated[bool, typer.Option(help="show the progress bar")]
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``timeout``, ``kill``, a batch scheduler), raised where Ctrl-C would be, so
+    the workers are stopped and the finished runs kept the same way."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated
+
+
 def _user_errors(fn):
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, _on_sigterm)
         try:
             return fn(*args, **kwargs)
         except SensfwError as err:
             console.print(f"[bold red]error:[/] {escape(str(err))}", highlight=False,
                           markup=True, soft_wrap=True)
             raise typer.Exit(code=2) from None
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as err:
             console.print("[yellow]interrupted; finished runs are kept in the run store[/]")
-            raise typer.Exit(code=130) from None
+            raise typer.Exit(code=143 if isinstance(err, Terminated) else 130) from None
     return wrapper
 
 

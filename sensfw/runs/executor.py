@@ -100,6 +100,9 @@ def _worker_main(tasks, results, wid: int) -> None:
         try:
             spec = tasks.recv()
         except (EOFError, OSError):  # the parent is gone (killed): nothing left to do
+            # and nobody reads what this worker put last: exit without waiting for the
+            # queue's feeder thread to write it (it would wait for ever, the worker with it)
+            results.cancel_join_thread()
             return
         if spec is None:
             return
