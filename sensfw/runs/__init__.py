@@ -3,6 +3,7 @@ are executed (serial, local processes, Dask)."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -39,6 +40,20 @@ class Progress:
     def stop(self) -> None: ...
 
 
+def _outgrown(rec: dict, spec: RunSpec) -> bool:
+    """A stored failure that was a timeout shorter than ``spec``'s: the timeout is not part
+    of a run's key (it is the machine's limit, not the run's), so a run stopped at 0.3 s is
+    tried again under 120 s instead of being handed back as failed."""
+    error = str(rec.get("error") or "")
+    if not error.startswith("timeout:") or not spec.timeout:
+        return False
+    before = rec.get("timeout")
+    if before is None:  # stored before the timeout was: read it from the message
+        m = re.search(r"after ([0-9.eE+-]+) s", error)
+        before = float(m.group(1)) if m else None
+    return before is not None and float(spec.timeout) > float(before) * (1 + 1e-9)
+
+
 @dataclass
 class Runner:
     """Runs specs through the store: finished runs are loaded, missing ones computed and
@@ -63,6 +78,8 @@ class Runner:
         todo, status, stored_failed = [], {}, 0
         for key, spec in unique.items():
             rec = self.store.record(key)
+            if rec is not None and rec["status"] != "ok" and _outgrown(rec, spec):
+                rec = None  # it ran out of a shorter time than it has now: run it again
             if rec is not None and (rec["status"] == "ok" or not self.retry_failed):
                 status[key] = rec["status"]
                 stored_failed += rec["status"] == "failed"

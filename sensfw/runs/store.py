@@ -118,6 +118,8 @@ class RunStore:
                     meta[k] = result.signals.meta[k]
         else:
             meta["error"] = result.error
+            if spec.timeout:  # the machine's limit, not the run's: a longer one may pass
+                meta["timeout"] = float(spec.timeout)
         _atomic_write(meta_path, json.dumps(meta, indent=1, sort_keys=True).encode())
 
     def keys(self) -> list[str]:

@@ -106,3 +106,27 @@ def test_failed_runs_are_recorded_with_their_reason(tmp_path):
 def test_garbage_records_are_ignored(tmp_path, bad):
     (tmp_path / "abc.json").write_text(bad)
     assert RunStore(tmp_path).record("abc") is None
+
+
+def test_a_run_that_timed_out_is_run_again_under_a_longer_timeout(tmp_path):
+    """The timeout is not part of a run's key, so a run stored as failed after 0.3 s was
+    handed back as failed under 120 s ('timeout: no result after 0.3 s'). Now it is run
+    again when the timeout has grown, and handed back when it has not; other failures
+    (a divergence) stay failed until --retry-failed."""
+    from sensfw.runs import Runner, RunResult
+
+    m = models.get("two_dof")()
+    short = RunSpec.create(m, m.parameters().complete({}), EX, SolverSettings(timeout=0.3))
+    long = RunSpec.create(m, m.parameters().complete({}), EX, SolverSettings(timeout=120.0))
+    assert short.key() == long.key()
+    store = RunStore(tmp_path)
+    store.save(short, RunResult(short.key(), False, error="timeout: no result after 0.3 s"))
+    with Runner(store, backend="serial") as runner:
+        assert runner.run([short]) == {short.key(): "failed"}
+        assert runner.counts.new == 0
+        assert runner.run([long]) == {long.key(): "ok"}
+        assert runner.counts.new == 1
+    other = spec(k1=5100.0)
+    store.save(other, RunResult(other.key(), False, error="diverged at step 1e-05"))
+    with Runner(store, backend="serial") as runner:
+        assert runner.run([other]) == {other.key(): "failed"}
