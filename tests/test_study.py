@@ -416,3 +416,18 @@ def test_an_empty_calibration_list_is_refused():
     data["calibration"]["parameters"] = []
     assert problems(data)["calibration.parameters"].startswith(
         "an empty list calibrates nothing")
+
+
+def test_true_where_a_quantity_is_expected_is_an_error_not_one():
+    """pydantic's lax mode made ``max = true`` the bound 1.0 mm/s, ``amplitude = true`` 1 N
+    and ``timeout = true`` 1 s, silently (or reported a bound it had made 1 at the
+    nominal's path)."""
+    data = copy.deepcopy(QUICK)
+    data["parameters"] = {"slide_damping": {"max": True}}
+    data["excitation"]["amplitude"] = True
+    data.setdefault("solver", {})["timeout"] = False
+    got = problems(data)
+    for path, word in (("parameters.slide_damping.max", "true"),
+                       ("excitation.amplitude", "true"), ("solver.timeout", "false")):
+        assert got[path] == ("expected a number or a quantity with its unit (\"1e6 N/mm\"), "
+                             f"got {word}"), got

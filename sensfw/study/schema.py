@@ -6,11 +6,21 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictInt, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, field_validator
 
 from ..models.stepsize import DEFAULT_TOLERANCE
 
-Quantity = str | float | int
+
+def _no_bool(value: Any) -> Any:
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number or a quantity with its unit (\"1e6 N/mm\"), "
+                         f"got {str(value).lower()}")
+    return value
+
+
+#: a value with or without its unit: "1e6 N/mm", 1e6, 3; a ``true`` (a typo in a study
+#: file) is an error, not the number 1 that pydantic's lax mode would make of it
+Quantity = Annotated[str | float | int, BeforeValidator(_no_bool)]
 
 
 class _Strict(BaseModel):
