@@ -178,13 +178,14 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
         result.notes.append(f"{len(failed)} of {len(table)} runs failed and were left out: "
                             + why)
     if stage.select is not None:
-        by = stage.select.by or stage.scorers[0].key
+        by = _score_column(scores, stage.select.by or stage.scorers[0].key, stage,
+                           chosen=stage.select.by is not None)
         result.screening = design.analyze(space, table, scores[by].to_numpy(dtype=float))
         result.notes.extend(result.screening.notes)
         result.selected = _select(stage, result.screening, scores)
     elif not stage.surrogates:
-        by = stage.scorers[0].key
         try:
+            by = _score_column(scores, stage.scorers[0].key, stage, chosen=False)
             result.screening = design.analyze(space, table, scores[by].to_numpy(dtype=float))
         except SensfwError as err:
             result.notes.append(f"analysis of {stage.design}: {err}")
@@ -193,6 +194,22 @@ def run_stage(study: Study, stage: StageSpec, runner, done: dict[str, StageResul
         if stage.confirmation_runs:
             confirm(study, stage, space, runner, result, scorers, ev.reference)
     return result
+
+
+def _score_column(scores, by: str, stage, chosen: bool) -> str:
+    """The score column a stage's analysis reads: ``by`` itself, or a scorer's one value
+    (``label.key``) where it gives several; several and not chosen: the first, by the
+    study's ``select.by = "label.key"`` otherwise."""
+    if by in scores.columns:
+        return by
+    cols = [c for c in scores.columns if c.startswith(f"{by}.")]
+    if not cols:
+        raise AnalysisError(f"stage {stage.name!r}: no score {by!r} (scores: "
+                            f"{', '.join(scores.columns)})")
+    if len(cols) > 1 and chosen:
+        raise AnalysisError(f"stage {stage.name!r}: scorer {by!r} gives several values "
+                            f"({', '.join(cols)}): name one, select.by = {cols[0]!r}")
+    return cols[0]
 
 
 def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: None,
@@ -240,12 +257,13 @@ def run_study(study: Study, runner=None, log: Callable[[str], None] = lambda s: 
             try:
                 res = run_stage(study, stage, runner, done, (known or {}).get(stage.name),
                                 (validated or {}).get(stage.name))
-            except SensfwError as err:
+            except Exception as err:  # a bug's crash as much as a user error
                 if out is not None and stages:  # the stages that finished are written
                     write_result(StudyResult(study=study, stages=stages, store=runner.store,
                                              counts=runner.counts,
-                                             stopped={"stage": stage.name,
-                                                      "error": str(err)}),
+                                             stopped={"stage": stage.name, "error": str(err)
+                                                      if isinstance(err, SensfwError) else
+                                                      f"{type(err).__name__}: {err}"}),
                                  out, report=report, wall=time.perf_counter() - t0)
                 raise
             done[stage.name] = res

@@ -410,3 +410,48 @@ def test_a_worker_count_below_one_is_refused():
 
     res = CliRunner().invoke(app, ["run", str(QUICK), "--workers", "-1", "--dry-run"])
     assert res.exit_code == 2 and "--workers" in res.output
+
+
+TWO_VALUES = '''
+import numpy as np
+from sensfw.scorers import Scorer
+
+class TwoValues(Scorer):
+    name = "two_values_test"
+    def score(self, signals, reference=None):
+        x = self.signal(signals)
+        return {"mean": float(np.mean(x)), "rms": float(np.sqrt(np.mean(x ** 2)))}
+'''
+
+
+@pytest.mark.parametrize("by", [None, "tv.rms", "tv"])
+def test_a_scorer_of_several_values_feeds_a_selecting_stage(tmp_path, monkeypatch, by):
+    """The scorer contract allows several values (columns ``label.key``): a selecting stage
+    read ``scores[label]`` (a KeyError after every run), and ``select.by = "tv.mean"`` was
+    refused at validation. Now the first value is read unless ``select.by`` names one;
+    naming the scorer alone is an error listing its values."""
+    from sensfw.errors import AnalysisError
+    from sensfw.pipeline import run_study
+    from sensfw.runs import Runner, RunStore
+    from sensfw.study import Study
+
+    (tmp_path / "twoval_mod.py").write_text(TWO_VALUES)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    select = {"threshold": 0.05, **({"by": by} if by else {})}
+    study = Study.from_dict({
+        "study": {"name": "multi"}, "model": {"name": "ishigami"},
+        "excitation": {"duration": "0.01 s"},
+        "stages": [{"name": "screen", "design": "oat", "select": select,
+                    "scorers": [{"name": "twoval_mod:TwoValues", "label": "tv"}]}]}, "m.toml")
+    with Runner(RunStore(tmp_path / "runs"), backend="serial") as runner:
+        if by == "tv":
+            with pytest.raises(AnalysisError, match=r"scorer 'tv' gives several values "
+                                                    r"\(tv\.mean, tv\.rms\): name one"):
+                run_study(study, runner)
+            return
+        res = run_study(study, runner)
+    (stage,) = res.stages
+    assert stage.selected  # the OAT of Ishigami's function: x1 at least moves both values
+    col = by or "tv.mean"
+    y = stage.scores[col].to_numpy(float)
+    assert np.ptp(y) > 0

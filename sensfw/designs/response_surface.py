@@ -112,6 +112,8 @@ class CentralComposite(_QuadraticDesign):
     def _matrix(self, k):
         from pyDOE3 import ccdesign
 
+        if k < 2:
+            raise DesignError(f"design 'central_composite' needs at least 2 variables, got {k}")
         o = self.options
         X = ccdesign(k, center=tuple(o["center"]), alpha=o["alpha"], face=o["face"])
         if np.max(np.abs(X)) > 1 + 1e-9:

@@ -48,9 +48,12 @@ class GeneralizedSubset(FullFactorial):
         from pyDOE3 import gsd
 
         o = self.options
+        if len(space) < 2:
+            raise DesignError(f"design {self.name!r} needs at least 2 variables, got "
+                              f"{len(space)}")
         try:
             parts = gsd(self._levels(space), o["reduction"], n=o["reduction"])
-        except ValueError as err:
+        except (ValueError, AssertionError) as err:  # pyDOE3 asserts its preconditions
             raise DesignError(f"design {self.name!r}: no generalized subset design with "
                               f"reduction {o['reduction']} for levels {self._levels(space)} "
                               f"({err})", option="reduction") from None

@@ -209,7 +209,8 @@ def check_stages(stages: Sequence[StageSpec], *, parameters: ParameterSet | None
         found, labels = _scorers(st, where, excitation, sensors)
         problems += found
         problems += _surrogates(st, where)
-        if st.select is not None and st.select.by is not None and st.select.by not in labels:
+        if (st.select is not None and st.select.by is not None and st.select.by not in labels
+                and st.select.by.split(".", 1)[0] not in labels):  # "label.key": one value
             problems.append((f"{where}.select.by", f"no scorer labelled {st.select.by!r} "
                                                    f"in this stage ({', '.join(labels)})"))
         problems += _variables(st, i, stages, variables)

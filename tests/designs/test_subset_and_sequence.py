@@ -94,3 +94,12 @@ def test_uncertainty_sampling_picks_the_candidate_farthest_from_the_runs():
     assert list(nxt.index) == ["g8"]
     # a candidate already run (g0 = -1) is never proposed again
     assert set(propose(runs, y, grid, n=20, options=fast).index) == set(grid.index) - {"g0"}
+
+
+@pytest.mark.parametrize("name", ["central_composite", "subset"])
+def test_a_design_of_two_or_more_variables_refuses_one(name):
+    """pyDOE3 asserted ('"n" must be an integer greater than 1', 'Orthogonal array
+    indexing does not match partition structure'): a traceback in ``validate``."""
+    one = DesignSpace.from_parameters(PARAMETERS, GROUPS, select=["slide_damping"])
+    with pytest.raises(DesignError, match=rf"'{name}' needs at least 2 variables, got 1"):
+        make_design(name).n_runs(one)
