@@ -46,6 +46,13 @@ class FullFactorial(Design):
             return self
 
     def _levels(self, space: DesignSpace) -> list[int]:
+        if self.options["centre"] == "nominal":
+            on = [v.name for v in space.variables if not v.low < v.nominal < v.high]
+            if on:
+                raise DesignError(f"design {self.name!r}: centre = 'nominal' needs each "
+                                  f"nominal inside its bounds, but {', '.join(on)} has it on "
+                                  "a bound: its middle level would repeat an end (use "
+                                  "centre = 'midpoint')", option="centre")
         lv = self.options["levels"]
         if isinstance(lv, (list, tuple)):
             if len(lv) != len(space):

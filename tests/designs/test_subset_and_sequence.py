@@ -103,3 +103,16 @@ def test_a_design_of_two_or_more_variables_refuses_one(name):
     one = DesignSpace.from_parameters(PARAMETERS, GROUPS, select=["slide_damping"])
     with pytest.raises(DesignError, match=rf"'{name}' needs at least 2 variables, got 1"):
         make_design(name).n_runs(one)
+
+
+@pytest.mark.parametrize("name", ["full_factorial", "subset", "optimal"])
+def test_a_nominal_centre_on_a_bound_is_refused(name):
+    """``centre = "nominal"`` with a nominal on its min: the levels were [min, min, max],
+    9 runs planned, 6 distinct, and Eq. 18 then refused the squares."""
+    bounds = {"slide_damping": {"min": 1.0, "nominal": 1.0, "max": 468.0}}
+    space = DesignSpace.from_parameters(PARAMETERS, GROUPS,
+                                        select=["slide_damping", "slide_stiffness"],
+                                        bounds=bounds)
+    with pytest.raises(DesignError, match=r"slide_damping has it on a bound") as info:
+        make_design(name, centre="nominal").n_runs(space)
+    assert info.value.option == "centre"
