@@ -217,10 +217,15 @@ class FractionalFactorial(Design):
             got = resolution(X, want)
         except Exception:
             X, got = None, 0
-        if X is None or got < want:  # pyDOE3 issue #8: do not trust it
+        # pyDOE3 issue #8: do not trust it; nor its size where a resolution III design of
+        # the fewest runs, 2^p >= k + 1, exists (for k = 7 and 15 it gave 16 and 32 runs
+        # where 8 and 16 saturate)
+        fewest = 2 ** int(np.ceil(np.log2(k + 1)))
+        if X is None or got < want or (want == 3 and len(X) > fewest):
             gen = search_generators(k, want)
-            X = fracfact(gen)
-            return X, gen, resolution(X, want + 2)
+            Y = fracfact(gen)
+            if X is None or got < want or len(Y) < len(X):
+                return Y, gen, resolution(Y, want + 2)
         return X, "(pyDOE3 fracfact_by_res)", resolution(X, want + 2)
 
     def n_runs(self, space: DesignSpace) -> int:

@@ -232,3 +232,14 @@ def test_an_effect_of_round_off_is_no_effect(name, options):
     assert any("round-off" in n for n in res.notes)
     res = design.analyze(space, table, 100.0 + 1e-3 * x1)
     assert res.importance["x1"] == pytest.approx(1.0) and res.ranking[0] == "x1"
+
+
+@pytest.mark.parametrize(("k", "runs"), [(3, 4), (7, 8), (8, 16), (15, 16), (19, 32)])
+def test_a_resolution_iii_fraction_has_the_fewest_runs(k, runs):
+    """2^p >= k + 1 runs: saturated at k = 7 and 15, where pyDOE3's fracfact_by_res gave
+    twice as many (16 and 32) at no higher resolution."""
+    from sensfw.designs import make_design
+    from sensfw.designs.fractional_factorial import resolution
+
+    X, _, res = make_design("fractional_factorial", resolution=3).matrix(k)
+    assert len(X) == runs and res >= 3 and resolution(X) >= 3
