@@ -239,8 +239,9 @@ class DesignSpace:
                     f"unknown design variable(s) {missing}; known: {', '.join(variables)}"
                 )
             chosen = [variables[s] for s in select]
-        else:
-            chosen = list(variables.values())
+        else:  # every variable that can vary: one pinned by min = max is a fixed parameter
+            chosen = [v for v in variables.values()
+                      if not all(lo == hi for lo, _, hi in v.bounds.values())]
         frozen = [v.name for v in chosen if all(lo == hi for lo, _, hi in v.bounds.values())]
         if frozen:
             raise ParameterError(

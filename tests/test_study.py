@@ -431,3 +431,15 @@ def test_true_where_a_quantity_is_expected_is_an_error_not_one():
                        ("excitation.amplitude", "true"), ("solver.timeout", "false")):
         assert got[path] == ("expected a number or a quantity with its unit (\"1e6 N/mm\"), "
                              f"got {word}"), got
+
+
+def test_a_parameter_pinned_by_min_equal_max_is_fixed_not_refused():
+    """min = max in ``[parameters]`` for a parameter no stage names (a Table 1 style
+    override that fixes it) was refused with 'leave them out of the stage's variables',
+    which it already was. It is a fixed parameter: 'all' leaves it out; a stage that names
+    it is still refused (the test above)."""
+    data = copy.deepcopy(QUICK)
+    data["parameters"] = {"l1_damping": {"min": 0.01, "max": 0.01, "nominal": 0.01}}
+    study = Study.from_dict(data, "x.toml")
+    assert "l1_damping" not in study.variable_names()
+    assert len(study.variable_names()) == 18
