@@ -167,7 +167,7 @@ class OptimalDesign(FullFactorial):
         k = len(space)
         terms = (k + 1) * (k + 2) // 2
         n_fixed = len(self._fixed(space))
-        grid = super().n_runs(space)  # an upper bound: the OAT runs on the grid are not free
+        grid = len(self._candidates(space))  # the grid's points the fixed runs leave
         runs = self.options["runs"] or min(terms + 5, grid)
         if runs + n_fixed < terms:
             raise DesignError(f"design {self.name!r}: {runs} runs"
@@ -176,17 +176,22 @@ class OptimalDesign(FullFactorial):
                               option="runs")
         if runs > grid:
             raise DesignError(f"design {self.name!r}: {runs} runs asked, the grid has {grid} "
-                              "points", option="runs")
+                              "points" + (" besides the runs already made" if n_fixed else ""),
+                              option="runs")
         return runs
+
+    def _candidates(self, space: DesignSpace) -> pd.DataFrame:
+        """The grid's points that are not among the fixed runs."""
+        grid = super().generate(space)
+        done = {tuple(r) for r in self._fixed(space).to_numpy(float)}
+        return grid[[tuple(r) not in done for r in grid.to_numpy(float)]]
 
     def n_runs(self, space: DesignSpace) -> int:
         return self._runs(space) + len(self._fixed(space))
 
     def generate(self, space: DesignSpace, seed=None) -> pd.DataFrame:
-        grid = super().generate(space)
         fixed = self._fixed(space)
-        done = {tuple(r) for r in fixed.to_numpy(float)}
-        grid = grid[[tuple(r) not in done for r in grid.to_numpy(float)]]
+        grid = self._candidates(space)
         k = self._runs(space)
         if k > len(grid):
             raise DesignError(f"design {self.name!r}: {k} runs asked, the grid has "

@@ -143,3 +143,19 @@ def test_the_screen_runs_are_runs_of_the_nominal_grid_not_of_the_papers_grid():
     assert not oat & keys(make_design("full_factorial").generate(space))
     np.testing.assert_allclose(space.code(pd.DataFrame([space.nominal_row()])).to_numpy(),
                                [[-9 / 11, 0.0, -9 / 11, -9 / 11]], atol=1e-12)
+
+
+def test_an_oat_augmented_design_counts_the_grid_points_the_oat_leaves():
+    """Two variables, ``augment = "oat"``, ``centre = "nominal"``: the OAT's 5 runs are 5 of
+    the 3^2 grid's 9 points, so 4 remain. The default asked min(6 + 5, 9) = 9 and
+    validation passed it, then the stage failed ('9 runs asked, the grid has 4
+    candidates'). Now the plan counts what the stage runs: 5 + 4."""
+    space = DesignSpace.from_parameters(PARAMETERS, GROUPS,
+                                        select=["slide_stiffness", "slide_damping"])
+    d = make_design("optimal", augment="oat", centre="nominal")
+    table = d.generate(space, seed=0)
+    assert d.n_runs(space) == len(table) == 9
+    assert len({tuple(r) for r in table.to_numpy(float)}) == 9
+    with pytest.raises(DesignError, match="5 runs asked, the grid has 4 points besides the "
+                                          "runs already made"):
+        make_design("optimal", augment="oat", centre="nominal", runs=5).n_runs(space)
