@@ -34,7 +34,8 @@ def simulate(
     set_: Annotated[list[str] | None, typer.Option("--set", help="NAME=VALUE (paper units)")]
     = None,
     effect: Annotated[list[str] | None, typer.Option(
-        help="NAME[@PLACE][:PARAM=VALUE,...] hidden physical effect")] = None,
+        help="NAME[@PLACE][:KEY=VALUE,...] hidden physical effect; KEY a parameter of "
+             "the effect or one of its options (micro_slip:elements=6)")] = None,
     noise: Annotated[float, typer.Option(help="noise std as a fraction of each RMS")] = 0.0,
     seed: Annotated[int, typer.Option(help="noise seed")] = 0,
     amplitude: Annotated[float | None, typer.Option(help="excitation level (N, or V)")] = None,

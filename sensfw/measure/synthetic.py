@@ -26,14 +26,45 @@ from ..study import Study
 
 
 def parse_effect(text: str) -> tuple[dict, dict[str, float]]:
-    """``NAME[@PLACE][:PARAM=VALUE,...]`` -> (effect spec, parameter values)."""
+    """``NAME[@PLACE][:KEY=VALUE,...]`` -> (effect spec, parameter values): a key that is
+    one of the effect's options (``micro_slip:elements=6``, as ``augment --option`` takes
+    them) goes into the spec, the others are its parameters' values."""
     head, _, tail = text.partition(":")
     name, _, attach = head.partition("@")
     spec = {"name": name.strip()}
     if attach:
         spec["attach"] = attach.strip()
-    items = filter(None, (s.strip() for s in tail.split(",")))
-    return spec, parse_assignments(items, f"effect {text!r}")
+    items = [s.strip() for s in tail.split(",") if s.strip()]
+    options = _option_names(spec["name"])
+    opts = [i for i in items if i.partition("=")[0].strip() in options]
+    for item in opts:
+        key, _, val = item.partition("=")
+        spec[key.strip()] = _literal(val.strip())
+    rest = [i for i in items if i not in opts]
+    return spec, parse_assignments(rest, f"effect {text!r}")
+
+
+def _option_names(effect: str) -> set[str]:
+    """The options an effect declares besides ``attach`` (none for an unknown name: the
+    model's check names it)."""
+    from ..options import options_model
+    from ..plugins import effects
+
+    try:
+        cls = effects.get(effect)
+    except Exception:  # an unknown effect: reported where the model resolves it
+        return set()
+    return set(options_model(cls).model_fields) - {"attach"}
+
+
+def _literal(text: str):
+    """An option's value as written: an integer, a number, or a string."""
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
 
 
 def parse_assignments(items: Iterable[str], where: str) -> dict[str, float]:
@@ -166,6 +197,10 @@ def synthesize(study: Study, sets: Mapping[str, float] | None = None,
         level = ex.amplitude / rig.gain
     drive = _drifting(ex, rig.drift, rng) if rig.drift else ex
     sig = model.simulate(params, drive, study.solver)
+    if len(sig.t) < 2:
+        raise SensfwError(f"model {study.spec.model.name!r} gives one value per run, not a "
+                          "time response (a function model): there is nothing a rig would "
+                          "record")
     sig = record(sig, rig, level, rng)
     info = {"effects": specs, "parameters": values, "amplitude": level,
             "unit": sig.units["force"], "excitation": ex.kind,

@@ -254,3 +254,24 @@ def test_a_voltage_studys_gain_is_its_parameter_and_drift_stays_below_one():
         synthesize(beam, rig=Rig(gain=2.0))
     with pytest.raises(SensfwError, match="rig drift must be below 1"):
         Rig(drift=1.0)
+
+
+def test_an_effects_options_pass_through_simulate_and_a_function_model_is_refused():
+    """``--effect micro_slip:elements=6`` was 'unknown parameter elements': the effect's
+    options (as ``augment --option`` takes them) go into its spec, the rest are parameter
+    values. A function model (Ishigami: one value per run) wrote a one-sample 'log chirp'
+    record."""
+    from sensfw.errors import SensfwError
+    from sensfw.measure.synthetic import parse_effect
+    from sensfw.study import Study
+
+    assert parse_effect("micro_slip@joint:elements=6,microslip_force=800") == (
+        {"name": "micro_slip", "attach": "joint", "elements": 6}, {"microslip_force": 800.0})
+    assert parse_effect("added_mass:added_mass=0.01") == ({"name": "added_mass"},
+                                                          {"added_mass": 0.01})
+    ishigami = Study.from_dict({"study": {"name": "i"}, "model": {"name": "ishigami"},
+                                "excitation": {"duration": "0.01 s"},
+                                "stages": [{"name": "s", "design": "oat",
+                                            "scorers": [{"name": "rms"}]}]}, "i.toml")
+    with pytest.raises(SensfwError, match="gives one value per run, not a time response"):
+        synthesize(ishigami)
