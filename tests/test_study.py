@@ -443,3 +443,19 @@ def test_a_parameter_pinned_by_min_equal_max_is_fixed_not_refused():
     study = Study.from_dict(data, "x.toml")
     assert "l1_damping" not in study.variable_names()
     assert len(study.variable_names()) == 18
+
+
+def test_a_stage_on_a_selection_no_design_of_it_can_take_is_refused():
+    """``box_behnken`` (3 variables at least) on a screen that keeps at most 2: validation
+    passed it, ``run`` spent the screen and then stopped. A selection that may fit (at most
+    5 for a 3-variable design) passes."""
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["select"] = {"threshold": 0.05, "max_variables": 2}
+    data["stages"][1]["design"] = "box_behnken"
+    data["stages"][1]["design_options"] = {}
+    got = problems(data)
+    assert got["stages[1].design"] == ("design 'box_behnken' needs at least 3 variables, "
+                                       "got 2 (this stage takes the at most 2 variable(s) "
+                                       "that stage 'screen' selects)")
+    data["stages"][0]["select"]["max_variables"] = 5
+    Study.from_dict(data, "x.toml")

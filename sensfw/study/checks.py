@@ -96,8 +96,34 @@ def plugin_problems(registry, name: str, options: Mapping[str, Any], where: str,
     return plugin, _at(where, found)
 
 
+def _selected_design(design, st: StageSpec, where: str, space, variables: Sequence[str],
+                     stages: Sequence[StageSpec]) -> Problems:
+    """A stage on an earlier stage's selection: its design at every count of variables the
+    selection can give (1 to the earlier stage's ``max_variables`` or its variable count);
+    a problem only where no count fits (``box_behnken``, 3 variables at least, after a
+    selection of at most 2), so a study is not refused for a selection it may not make.
+    Not checked after a grouped screen (its selection counts members, not groups)."""
+    ref = st.variables.split(":", 1)[1]
+    src = next((s for s in stages if s.name == ref), None)
+    if src is None or src.select is None or src.groups or not variables:
+        return []
+    most = len(variables) if src.variables == "all" else len(src.variables)
+    most = min(src.select.max_variables or most, most, len(variables))
+    last = None
+    for k in range(1, most + 1):
+        try:
+            design.n_runs(space(list(variables[:k])))
+            return []
+        except SensfwError as err:
+            last = err
+    if last is None:
+        return []
+    return [(f"{where}.design", f"{last} (this stage takes the at most {most} variable(s) "
+                                f"that stage {ref!r} selects)")]
+
+
 def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace] | None,
-            variables: Sequence[str]) -> Problems:
+            variables: Sequence[str], stages: Sequence[StageSpec] | None = None) -> Problems:
     """The stage's design and its options; its run count where the space is known (the
     stage's variables are not taken from an earlier stage)."""
     from ..plugins import designs
@@ -107,7 +133,7 @@ def _design(st: StageSpec, where: str, space: Callable[[list[str]], DesignSpace]
     if found or space is None:
         return found
     if isinstance(st.variables, str) and st.variables.startswith("selected:"):
-        return []
+        return _selected_design(design, st, where, space, variables, stages or [])
     names = list(variables) if st.variables == "all" else list(st.variables)
     if not set(names) <= set(variables):
         return []  # unknown variables are reported at stages[i].variables
@@ -214,5 +240,5 @@ def check_stages(stages: Sequence[StageSpec], *, parameters: ParameterSet | None
             problems.append((f"{where}.select.by", f"no scorer labelled {st.select.by!r} "
                                                    f"in this stage ({', '.join(labels)})"))
         problems += _variables(st, i, stages, variables)
-        problems += _design(st, where, space, variables)
+        problems += _design(st, where, space, variables, stages)
     return problems, stage_bounds
