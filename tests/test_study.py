@@ -459,3 +459,21 @@ def test_a_stage_on_a_selection_no_design_of_it_can_take_is_refused():
                                        "that stage 'screen' selects)")
     data["stages"][0]["select"]["max_variables"] = 5
     Study.from_dict(data, "x.toml")
+
+
+def test_validate_prints_the_plan_and_run_refuses_a_file_as_its_folder(tmp_path):
+    """``validate`` said it printed the plan and printed one line; ``run --out FILE`` was a
+    FileExistsError traceback."""
+    from typer.testing import CliRunner
+
+    from sensfw.cli import app
+
+    res = CliRunner().invoke(app, ["validate", str(ROOT / "studies" / "quick.toml")],
+                             env={"COLUMNS": "200"})
+    assert res.exit_code == 0
+    assert "plan of study 'quick'" in res.output and "at most 20 runs" in res.output
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    res = CliRunner().invoke(app, ["run", str(ROOT / "studies" / "quick.toml"), "--out",
+                                   str(afile)])
+    assert res.exit_code == 2 and "a file of that name exists" in res.output

@@ -41,22 +41,15 @@ def run(
     progress: ShowProgress = True,
 ) -> None:
     """Run a study: screen, design of experiments, Eq. 18 regression, report."""
-    from ..pipeline import plan, run_study
+    from ..pipeline import run_study
     from ..study import Study
 
     study = Study.load(study_file)
     if dry_run:
-        table = Table(title=f"plan of study {study.name!r}")
-        for col in ("stage", "design", "variables", "runs", "scorers", "surrogates"):
-            table.add_column(col)
-        total = 0
-        for p in plan(study):
-            total += p["n_runs"]
-            table.add_row(p["stage"], p["design"], p["variables"], str(p["n_runs"]),
-                          ", ".join(p["scorers"]), ", ".join(p["surrogates"]))
-        out.print(table)
-        out.print(f"at most {total} runs (+1 nominal reference); cached runs are not recomputed")
+        _print_plan(study)
         return
+    if out_dir.exists() and not out_dir.is_dir():
+        raise SensfwError(f"--out {out_dir}: a file of that name exists; give a folder")
     runner = _runner(study, out_dir, workers, backend, scheduler, retry_failed, progress)
     t0 = time.perf_counter()
     try:
@@ -137,6 +130,22 @@ def compare_designs_cmd(
 
 
 
+def _print_plan(study) -> None:
+    """The run count of every stage (``run --dry-run``, ``validate``)."""
+    from ..pipeline import plan
+
+    table = Table(title=f"plan of study {study.name!r}")
+    for col in ("stage", "design", "variables", "runs", "scorers", "surrogates"):
+        table.add_column(col)
+    total = 0
+    for p in plan(study):
+        total += p["n_runs"]
+        table.add_row(p["stage"], p["design"], p["variables"], str(p["n_runs"]),
+                      ", ".join(p["scorers"]), ", ".join(p["surrogates"]))
+    out.print(table)
+    out.print(f"at most {total} runs (+1 nominal reference); cached runs are not recomputed")
+
+
 @command()
 def validate(study_file: StudyFile) -> None:
     """Check a study file and print its plan."""
@@ -145,6 +154,7 @@ def validate(study_file: StudyFile) -> None:
     study = Study.load(study_file)
     out.print(f"study {study.name!r} is valid: model {study.spec.model.name}, "
               f"{len(study.variable_names())} design variables, {len(study.stages)} stages")
+    _print_plan(study)
 
 
 @command()
