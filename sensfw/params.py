@@ -26,6 +26,11 @@ from .errors import ParameterError
 MM = 1e-3
 
 
+
+def spaced(unit: str) -> str:
+    """`` unit`` after a number, nothing for a dimensionless quantity (no trailing blank)."""
+    return f" {unit}" if unit else ""
+
 @dataclass(frozen=True)
 class Parameter:
     """A model parameter with its unit and bounds (Table 1 style)."""
@@ -56,8 +61,8 @@ class Parameter:
         span = max(abs(self.max), abs(self.min), 1e-300) * tol
         if not math.isfinite(value) or value < self.min - span or value > self.max + span:
             raise ParameterError(
-                f"parameter {self.name!r} = {value:g} {self.unit} is outside its bounds "
-                f"[{self.min:g}, {self.max:g}] {self.unit}"
+                f"parameter {self.name!r} = {value:g}{spaced(self.unit)} is outside its "
+                f"bounds [{self.min:g}, {self.max:g}]{spaced(self.unit)}"
             )
         return value
 

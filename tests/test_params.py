@@ -36,3 +36,15 @@ def test_a_value_outside_its_bounds_by_more_than_round_off_is_an_error():
     for f in (p.check, p.clip):
         with pytest.raises(ParameterError, match=r"exponent.*outside its bounds"):
             f(-0.9 - 1e-6)
+
+
+def test_a_dimensionless_bound_message_has_no_trailing_blank():
+    from sensfw.errors import ParameterError
+    from sensfw.params import Parameter
+
+    with pytest.raises(ParameterError) as info:
+        Parameter("exponent", "", 1.3, 1.2, 1.46).check(1.5)
+    assert str(info.value) == "parameter 'exponent' = 1.5 is outside its bounds [1.2, 1.46]"
+    with pytest.raises(ParameterError, match=r"= 2e\+06 N/mm is outside its bounds "
+                                             r"\[1e\+06, 1\.5e\+06\] N/mm$"):
+        Parameter("k", "N/mm", 1.2e6, 1e6, 1.5e6).check(2e6)

@@ -18,7 +18,7 @@ from typing import Any
 
 from ..errors import OptionError, SensfwError, UnknownPluginError
 from ..options import Problem, build
-from ..params import DesignSpace, ParameterSet
+from ..params import DesignSpace, ParameterSet, spaced
 from .schema import ParameterOverride, StageSpec
 from .units import to_unit
 
@@ -61,16 +61,17 @@ def bound_overrides(overrides: Mapping[str, ParameterOverride], declared: Parame
         nom = vals.get("nominal", p.nominal)
         if lo > hi:
             problems.append((f"{prefix}.{name}.max",
-                             f"max {hi:g} {p.unit} is below min {lo:g} {p.unit}"))
+                             f"max {hi:g}{spaced(p.unit)} is below min {lo:g}{spaced(p.unit)}"))
         elif not lo <= nom <= hi:
             problems.append((f"{prefix}.{name}.nominal",
-                             f"nominal {nom:g} {p.unit} outside [{lo:g}, {hi:g}] {p.unit}"))
+                             f"nominal {nom:g}{spaced(p.unit)} outside "
+                             f"[{lo:g}, {hi:g}]{spaced(p.unit)}"))
         if accepted is not None and name in accepted:  # the model refuses values outside
             a = accepted[name]
             told = {path for path, _ in problems}
             problems += [(f"{prefix}.{name}.{field_name}",
-                          f"{v:g} {a.unit} is outside the range the model {model} accepts, "
-                          f"[{a.min:g}, {a.max:g}] {a.unit}")
+                          f"{v:g}{spaced(a.unit)} is outside the range the model {model} "
+                          f"accepts, [{a.min:g}, {a.max:g}]{spaced(a.unit)}")
                          for field_name, v in vals.items() if not a.min <= v <= a.max
                          and f"{prefix}.{name}.{field_name}" not in told]
         changes[name] = vals
