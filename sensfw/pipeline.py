@@ -302,12 +302,22 @@ def load_result(out_dir: str | Path) -> StudyResult:
         study_file = Path(data.get("study_file") or study_file)
     study = Study.load(study_file)
     known: dict[str, dict[str, dict]] = {}
+    now = {stage.name: {sc.key: sc.model_dump(mode="json", exclude_none=True)
+                        for sc in stage.scorers} for stage in study.stages}
     for st in stages:  # each stage's own scores: a run two stages share has both
         own = known.setdefault(st["name"], {})
+        then = st.get("scorers")  # absent in results written before stop 53: trusted
+        same = {lab for lab, spec in (then or {}).items()
+                if now.get(st["name"], {}).get(lab) == spec}
+
+        def kept(column: str, then=then, same=same) -> bool:
+            """A stored score column whose scorer the study file still has unchanged."""
+            return then is None or column.split(".", 1)[0] in same or column in same
+
         for r in st.get("runs", []):
             own.setdefault(r["key"], {}).update(
                 {c: v.get(r["label"]) for c, v in st.get("scores", {}).items()
-                 if r["label"] in v})
+                 if r["label"] in v and kept(c)})
     validated = {st["name"]: st["validation"] for st in stages if "validation" in st}
     runs = StoredRuns(RunStore(out / "runs"), RunCounts(**data.get("runs", {})))
     stopped = data.get("stopped")

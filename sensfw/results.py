@@ -89,6 +89,9 @@ def results_json(res: StudyResult) -> dict:
                      for lab, key in zip(st.table.index, st.keys, strict=True)],
             "failed": st.failed,
             "scores": {c: st.scores[c].to_dict() for c in st.scores.columns},
+            # what each score is: a rebuild rescores a label whose scorer has changed
+            "scorers": {sc.key: sc.model_dump(mode="json", exclude_none=True)
+                        for sc in st.spec.scorers},
         }
         if st.reference_key is not None:
             entry["reference_key"] = st.reference_key

@@ -82,3 +82,34 @@ def test_a_run_missing_from_the_store_is_a_clear_error(folder, no_simulation):
     (folder / "runs" / f"{key}.json").unlink()
     with pytest.raises(SensfwError, match=f"run {key} is not in the run store"):
         load_result(folder)
+
+
+def test_a_scorer_changed_in_the_study_file_is_scored_again(folder, no_simulation):
+    """The screen's band narrowed to 50-300 Hz in DIR/study.toml under the same label: the
+    rebuild showed the stored 50-5000 Hz scores. Now results.json says what each score
+    is, and a label whose scorer changed is scored again from the stored runs; the
+    unchanged DoE scores are reused as stored."""
+    before = json.loads((folder / "results.json").read_text())
+    screen = before["stages"][0]
+    assert screen["scorers"]["frf_scalar"]["band"] == [50.0, 5000.0]
+    text = (folder / "study.toml").read_text()
+    assert "band = [50.0, 5000.0]" in text
+    (folder / "study.toml").write_text(text.replace("band = [50.0, 5000.0]",
+                                                    "band = [50.0, 300.0]", 1))
+    result = load_result(folder)
+    new = results_json(result)["stages"]
+    assert new[0]["scorers"]["frf_scalar"]["band"] == [50.0, 300.0]
+    assert new[0]["scores"]["frf_scalar"] != screen["scores"]["frf_scalar"]
+    # the rebuild is what a fresh run of the edited study gives: its scores are those of
+    # the scorer as the file now has it, on the same stored runs
+    from sensfw.scorers import make_scorer
+    from sensfw.study import Study
+
+    study = Study.load(folder / "study.toml")
+    sc = study.stages[0].scorers[0]
+    scorer = make_scorer(sc.name, channel=sc.channel or study.output, **sc.options())
+    ref = sensfw.runs.RunStore(folder / "runs").load(screen["reference_key"]).signals
+    run = screen["runs"][1]
+    got = scorer.score(sensfw.runs.RunStore(folder / "runs").load(run["key"]).signals, ref)
+    assert new[0]["scores"]["frf_scalar"][run["label"]] == pytest.approx(
+        next(iter(got.values())), rel=1e-12)
