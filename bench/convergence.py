@@ -41,8 +41,8 @@ CASES = {
 
 
 def frf_db_and_thd(sig) -> tuple[np.ndarray, float]:
-    _, H = frf(sig.force, sig.channels["crank_axial"], sig.fs, nperseg=2048, fmin=50,
-               fmax=5000)
+    _, H = frf(sig.force, sig.channels["crank_axial"], sig.fs,
+               nperseg=min(2048, len(sig.force)), fmin=50, fmax=5000)
     s = sig.sweep()
     return 20 * np.log10(np.abs(H)), thd(s.channels["crank_axial"], s.fs, s.f_inst)
 

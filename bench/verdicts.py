@@ -163,7 +163,12 @@ def main() -> None:
     args = ap.parse_args()
     from sensfw.runs import Runner, RunStore
 
-    chosen = [c for c in CASES if not args.only or c.id in args.only.split(",")]
+    wanted = [w.strip() for w in args.only.split(",")] if args.only else []
+    unknown = [w for w in wanted if w not in {c.id for c in CASES}]
+    if unknown:
+        ap.error(f"--only: unknown case id(s) {unknown}; known: "
+                 + ", ".join(repr(c.id) for c in CASES))
+    chosen = [c for c in CASES if not wanted or c.id in wanted]
     tmp = Path(tempfile.mkdtemp(prefix="sensfw-verdicts-"))
     s, wrong = study(), 0
     print(f"{'case':32s} {'suite':5s} {'expected':28s} {'verdict':28s} {'ok':3s} "

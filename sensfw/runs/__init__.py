@@ -149,6 +149,11 @@ class StoredRuns:
             key = s.key()
             rec = self.store.record(key)
             if rec is None:
+                if self.store.damaged(key):
+                    raise MissingRunError(f"{label}: run {key} in the run store "
+                                          f"{self.store.folder} is damaged (its signal file "
+                                          "is missing or fails its checksum); rerun the study "
+                                          "to simulate it again")
                 raise MissingRunError(f"{label}: run {key} is not in the run store "
                                       f"{self.store.folder} (the study, the model or sensfw "
                                       "changed since it ran?); rerun the study")

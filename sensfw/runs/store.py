@@ -80,6 +80,21 @@ class RunStore:
             return None
         return meta
 
+    def damaged(self, key: str) -> bool:
+        """Whether the store holds a record of ``key`` whose signal file is missing or fails
+        its checksum (a disk full, a copy cut short): read as absent, named as damaged."""
+        meta_path, data_path = self._paths(key)
+        try:
+            meta = json.loads(meta_path.read_text())
+        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+            return False
+        if meta.get("status") != "ok":
+            return False
+        try:
+            return hashlib.sha256(data_path.read_bytes()).hexdigest() != meta.get("sha256")
+        except FileNotFoundError:
+            return True
+
     def has(self, key: str, include_failed: bool = True) -> bool:
         meta = self.record(key)
         return meta is not None and (include_failed or meta["status"] == "ok")

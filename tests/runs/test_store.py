@@ -130,3 +130,20 @@ def test_a_run_that_timed_out_is_run_again_under_a_longer_timeout(tmp_path):
     store.save(other, RunResult(other.key(), False, error="diverged at step 1e-05"))
     with Runner(store, backend="serial") as runner:
         assert runner.run([other]) == {other.key(): "failed"}
+
+
+def test_a_damaged_entry_is_named_damaged_not_missing(tmp_path):
+    """A truncated signal file read as 'not in the run store (the study, the model or
+    sensfw changed since it ran?)': the wrong cause. It is named damaged."""
+    from sensfw.runs import MissingRunError, StoredRuns
+
+    store = RunStore(tmp_path)
+    s = spec()
+    store.save(s, execute(s))
+    assert not store.damaged(s.key())
+    (tmp_path / f"{s.key()}.npz").write_bytes(b"cut")
+    assert store.damaged(s.key()) and store.record(s.key()) is None
+    with pytest.raises(MissingRunError, match="is damaged"):
+        StoredRuns(store).run([s])
+    with pytest.raises(MissingRunError, match="is not in the run store"):
+        StoredRuns(store).run([spec(k1=5100.0)])
