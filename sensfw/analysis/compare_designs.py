@@ -20,6 +20,22 @@ from ..errors import AnalysisError, OptionError
 from ..runs import Runner
 from ..study import Study
 
+#: a reference surrogate whose k-fold Q² is below this predicts too poorly for its Sobol'
+#: ranking to judge designs by (a 20-run reference on the quick study: Q² -0.44, total
+#: effects summing to 1.7, a variable the OAT finds inert ranked second)
+TRUSTED_Q2 = 0.5
+
+
+def reference_notes(q2: float | None) -> list[str]:
+    """What to say of a reference surrogate of k-fold Q² ``q2``: nothing at
+    :data:`TRUSTED_Q2` or above, else that its ranking is no reference."""
+    if q2 is not None and q2 >= TRUSTED_Q2:
+        return []
+    return [f"the reference surrogate predicts its own runs poorly (Q² k-fold "
+            f"{'n/a' if q2 is None else f'{q2:.3f}'}, below {TRUSTED_Q2:g}): its Sobol' "
+            "ranking is no reference, and the designs' agreement with it means little; give "
+            "more --reference-runs"]
+
 
 def _simulation_seconds(runner: Runner, keys: Sequence[str]) -> float:
     total = 0.0
@@ -113,7 +129,10 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
         "q2_kfold": quality["q2_kfold"], "ranking": ref_rank,
         "sobol": sob.to_dict(orient="index"),
         "simulation_s": _simulation_seconds(runner, keys),
+        "notes": reference_notes(quality["q2_kfold"]),
     }
+    for n in reference_block["notes"]:
+        log(f"warning: {n}")
 
     rows = []
     for name in designs:
@@ -121,7 +140,15 @@ def compare_designs(study: Study, runner: Runner, designs: Sequence[str],
         ev = evaluate(study, space, built["designs"][name], runner, scorers, reference,
                       label=name)
         table, keys, failed, wall = ev.table, ev.keys, ev.failed, ev.wall
-        res = ev.design.analyze(space, table, ev.scores[label].to_numpy(float))
+        try:
+            res = ev.design.analyze(space, table, ev.scores[label].to_numpy(float))
+        except AnalysisError as err:  # every run failed: the design ranks nothing
+            rows.append({"design": name, "options": options.get(name, {}),
+                         "runs": len(table), "failed": len(failed), "wall_s": wall,
+                         "simulation_s": _simulation_seconds(runner, keys), "ranking": [],
+                         "importance": {}, "top_k_overlap": 0.0, "kendall_tau": None,
+                         "notes": [str(err)]})
+            continue
         imp = res.importance.reindex(space.names).fillna(0.0)
         rank = list(imp.sort_values(ascending=False, kind="stable").index)
         overlap = len(set(rank[:top_k]) & set(ref_rank[:top_k])) / top_k

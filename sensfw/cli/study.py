@@ -123,7 +123,8 @@ def compare_designs_cmd(
     _json(out_dir / "designs.json", result)
     write_designs_report(study, result, out_dir / "designs.html")
     out.print(agreement_table(result).to_string())
-    out.print(f"reference Q2 (k-fold) {result['reference']['q2_kfold']:.3f}; fewest runs to "
+    q2 = result["reference"]["q2_kfold"]
+    out.print(f"reference Q2 (k-fold) {'n/a' if q2 is None else f'{q2:.3f}'}; fewest runs to "
               f"the reference top-{result['top_k']}: "
               f"{result['fewest_runs_to_reference_top_k']}")
     out.print(f"-> {out_dir}/designs.json, {out_dir}/designs.html")

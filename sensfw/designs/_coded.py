@@ -57,16 +57,31 @@ def two_level_effects(space: DesignSpace, table: pd.DataFrame, y: np.ndarray,
     Z = np.sign(np.round(space.code(table).to_numpy(), 12))
     ok = np.isfinite(y)
     corner = np.all(Z != 0, axis=1)
+    effects = None
+    if not ok.all():
+        # an unbalanced design: the mean at +1 minus the mean at -1 mixes in the other
+        # variables' effects through the missing runs; twice the least-squares slopes of
+        # a main-effects model of the runs left do not (on complete data the two agree)
+        use = ok & corner
+        A = np.column_stack([np.ones(use.sum()), Z[use]])
+        if use.sum() >= A.shape[1] and np.linalg.matrix_rank(A) == A.shape[1]:
+            coef, *_ = np.linalg.lstsq(A, y[use], rcond=None)
+            effects = 2 * coef[1:]
+            notes.append(f"{(~ok).sum()} failed runs left out; the effects are twice the "
+                         "least-squares slopes of a main-effects model of the runs left "
+                         "(the design is no longer orthogonal: aliases may differ)")
+        else:
+            notes.append(f"{(~ok).sum()} failed runs left out; the runs left cannot "
+                         "separate every main effect, so the effects are differences of "
+                         "means and biased by the missing runs")
     recs = []
     for i, n in enumerate(space.names):
         hi = ok & corner & (Z[:, i] > 0)
         lo = ok & corner & (Z[:, i] < 0)
-        eff = y[hi].mean() - y[lo].mean() if hi.any() and lo.any() else np.nan
+        eff = (effects[i] if effects is not None else
+               y[hi].mean() - y[lo].mean() if hi.any() and lo.any() else np.nan)
         recs.append({"variable": n, "effect": eff, "aliased_with": aliased.get(n, "")})
     tab = pd.DataFrame(recs).set_index("variable")
-    if not ok.all():
-        notes.append(f"{(~ok).sum()} failed runs left out; the design is no longer "
-                     "balanced, effects are biased by the missing runs")
     center = ok & ~corner
     if center.any():
         curv = y[center].mean() - y[ok & corner].mean()

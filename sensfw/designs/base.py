@@ -94,6 +94,9 @@ def responses(table: pd.DataFrame, y, design: str) -> np.ndarray:
     y = np.asarray(y, dtype=float).ravel()
     if len(y) != len(table):
         raise AnalysisError(f"{design}: {len(y)} responses for {len(table)} runs")
+    if len(y) and not np.isfinite(y).any():
+        raise AnalysisError(f"{design}: none of the {len(y)} runs has a score (every run "
+                            "failed or scored NaN): there is nothing to analyse")
     return y
 
 

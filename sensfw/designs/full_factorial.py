@@ -15,6 +15,33 @@ from ..plugins import designs
 from .base import Design, DesignError, ScreeningResult, relative, responses
 
 
+def level_means(table: pd.DataFrame, y: np.ndarray) -> dict[str, pd.Series] | None:
+    """Least-squares level means of an additive (main effects) model ``y ~ 1 + sum_v
+    level(v)``: per variable, the mean response at each of its levels with the other
+    variables averaged over their levels equally. On a complete grid these are the raw
+    level means; on one with runs missing they are not biased by which runs are missing,
+    as raw means are. None where the runs cannot estimate every level's effect."""
+    n = len(y)
+    cols, where = [np.ones(n)], {}
+    levels = {v: np.unique(table[v].to_numpy(float)) for v in table.columns}
+    for v, lv in levels.items():
+        x = table[v].to_numpy(float)
+        where[v] = []
+        for lvl in lv[1:]:
+            where[v].append(len(cols))
+            cols.append((x == lvl).astype(float))
+    A = np.column_stack(cols)
+    if n < A.shape[1] or np.linalg.matrix_rank(A) < A.shape[1]:
+        return None
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    effects = {v: np.concatenate([[0.0], coef[where[v]]]) for v in levels}
+    out = {}
+    for v, lv in levels.items():
+        rest = sum(float(np.mean(e)) for u, e in effects.items() if u != v)
+        out[v] = pd.Series(coef[0] + effects[v] + rest, index=lv)
+    return out
+
+
 @designs.register("full_factorial")
 class FullFactorial(Design):
     """Every combination of ``levels`` values per variable between its low and high bound.
@@ -85,12 +112,23 @@ class FullFactorial(Design):
     def analyze(self, space: DesignSpace, table: pd.DataFrame, y) -> ScreeningResult:
         y = responses(table, y, self.name)
         ok = np.isfinite(y)
+        means = level_means(table.loc[ok, space.names], y[ok])
+        notes = [] if ok.all() else [
+            f"{(~ok).sum()} failed runs left out of the main effects, which are least-squares "
+            "means of an additive model of the runs left (the raw level means of an "
+            "unbalanced grid mix the other variables' effects in)"]
+        if means is None:  # the runs left cannot separate the levels: the raw means
+            means = {v: pd.Series(y[ok]).groupby(table[v].to_numpy()[ok]).mean()
+                     for v in space.names}
+            if not ok.all():
+                notes[-1] = (f"{(~ok).sum()} failed runs left out; the runs left cannot "
+                             "separate every level, so the main effects are raw level means "
+                             "and biased by the missing runs")
         recs = []
-        for v in space.variables:
-            means = pd.Series(y[ok]).groupby(table[v.name].to_numpy()[ok]).mean()
-            recs.append({"variable": v.name, "effect_range": float(means.max() - means.min()),
-                         **{f"mean@{lvl:.4g}": m for lvl, m in means.items()}})
+        for v in space.names:
+            m = means[v]
+            recs.append({"variable": v, "effect_range": float(m.max() - m.min()),
+                         **{f"mean@{lvl:.4g}": x for lvl, x in m.items()}})
         tab = pd.DataFrame(recs).set_index("variable")
-        notes = [] if ok.all() else [f"{(~ok).sum()} failed runs left out of the main effects"]
         imp = relative(tab["effect_range"], y, notes)
         return ScreeningResult(importance=imp, table=tab, notes=notes)

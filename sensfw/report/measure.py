@@ -286,6 +286,10 @@ def steps_of_signals(sig):
     return steps_of(sig.f_inst, sig.fs)
 
 
+def _q(x) -> str:
+    return "n/a" if x is None or not np.isfinite(x) else f"{x:.3f}"
+
+
 def write_designs_report(study, result, path) -> Path:
     """Design-strategy comparison: table and agreement against runs spent."""
     from ..analysis.compare_designs import agreement_table
@@ -295,8 +299,10 @@ def write_designs_report(study, result, path) -> Path:
                 f"scorer {result['scorer']}; {len(result['variables'])} variables")
     q2 = ref["q2_kfold"]
     page.p(f"Reference ranking: total Sobol' indices of a {ref['surrogate']} surrogate trained "
-           f"on a {ref['runs']}-run Latin hypercube (Q² LOO {ref['q2_loo']:.3f}, k-fold "
-           f"{q2:.3f}): " + ", ".join(ref["ranking"]), "ok" if q2 and q2 > 0.8 else "note")
+           f"on a {ref['runs']}-run Latin hypercube (Q² LOO {_q(ref['q2_loo'])}, k-fold "
+           f"{_q(q2)}): " + ", ".join(ref["ranking"]), "ok" if q2 and q2 > 0.8 else "note")
+    for n in ref.get("notes", []):
+        page.note(n)
     page.table(agreement_table(result))
     best = result["fewest_runs_to_reference_top_k"]
     page.p(f"Fewest runs to the reference top-{result['top_k']}: {best or 'no design'}.",

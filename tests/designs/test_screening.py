@@ -243,3 +243,50 @@ def test_a_resolution_iii_fraction_has_the_fewest_runs(k, runs):
 
     X, _, res = make_design("fractional_factorial", resolution=3).matrix(k)
     assert len(X) == runs and res >= 3 and resolution(X) >= 3
+
+
+def _unit_space(k):
+    params = ParameterSet([Parameter(f"x{i + 1}", "", 0.0, -1.0, 1.0) for i in range(k)])
+    return DesignSpace.from_parameters(params, {})
+
+
+@pytest.mark.parametrize(("name", "opts", "k"), [
+    ("fractional_factorial", {"resolution": 3}, 2), ("fractional_factorial", {}, 3),
+    ("plackett_burman", {}, 5), ("full_factorial", {"levels": 2}, 3),
+    ("full_factorial", {"levels": 3}, 2)])
+def test_a_failed_run_does_not_bias_the_main_effects(name, opts, k):
+    """y = sum_i (i + 1) x_i, exactly additive, the first run failed: a difference of
+    means over the runs left mixed the other variables' effects in (a 4-run fraction gave
+    x1 importance 0 for 0.5; a 2^3 effects 0.33, 2.67, 5 for 2, 4, 6). The effects are now
+    twice the least-squares slopes of the runs left (two-level designs) or least-squares
+    level means (full factorials): exactly the truth for an additive response."""
+    space = _unit_space(k)
+    d = make_design(name, **opts)
+    table = d.generate(space, seed=0)
+    X = space.code(table).to_numpy()
+    slopes = np.arange(1, k + 1, dtype=float)
+    y = X @ slopes
+    y[0] = np.nan
+    res = d.analyze(space, table, y)
+    np.testing.assert_allclose(res.importance.to_numpy(), slopes / slopes.max(), rtol=1e-9)
+    assert any("failed runs left out" in n for n in res.notes)
+
+
+@pytest.mark.parametrize("name", ["full_factorial", "fractional_factorial", "plackett_burman",
+                                  "definitive_screening", "box_behnken", "optimal"])
+def test_every_run_failed_is_an_error_not_importance_zero(name):
+    space = _unit_space(3)
+    d = make_design(name)
+    table = d.generate(space, seed=1)
+    with pytest.raises(AnalysisError, match=rf"{name}: none of the {len(table)} runs has a "
+                                            "score"):
+        d.analyze(space, table, np.full(len(table), np.nan))
+
+
+def test_a_reference_that_predicts_poorly_is_named():
+    from sensfw.analysis.compare_designs import TRUSTED_Q2, reference_notes
+
+    assert reference_notes(0.9) == [] and reference_notes(TRUSTED_Q2) == []
+    (note,) = reference_notes(-0.441)
+    assert "Q² k-fold -0.441, below 0.5" in note and "--reference-runs" in note
+    assert "n/a" in reference_notes(None)[0]
