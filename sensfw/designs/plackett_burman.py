@@ -39,6 +39,31 @@ def partial_aliasing(X: np.ndarray) -> float:
     return worst
 
 
+def alias_table(X: np.ndarray, names: list[str]) -> dict[str, str]:
+    """For each main effect, the two-factor interactions of other variables it is aliased
+    with: named where fully (equal or opposite columns: a regular 8-run design), else how
+    many it correlates with and by how much at most (the 12- and 20-run designs spread each
+    interaction over many main effects)."""
+    n, k = X.shape
+    out = {}
+    for i, name in enumerate(names):
+        full, part = [], []
+        for j, m in itertools.combinations(range(k), 2):
+            if i in (j, m):
+                continue
+            c = float(X[:, i] @ (X[:, j] * X[:, m])) / n
+            if abs(abs(c) - 1) < 1e-12:
+                full.append(f"{'-' if c < 0 else ''}{names[j]}:{names[m]}")
+            elif abs(c) > 1e-12:
+                part.append(abs(c))
+        text = ", ".join(full)
+        if part:
+            text += ("; " if text else "") + (f"partly with {len(part)} interaction(s), "
+                                              f"|r| <= {max(part):.2f}")
+        out[name] = text
+    return out
+
+
 @designs.register("plackett_burman")
 class PlackettBurman(Design):
     """2-level Plackett-Burman design at each variable's low/high bound: ``4 ceil((k + 1) /
@@ -70,4 +95,4 @@ class PlackettBurman(Design):
         X = self.matrix(len(space))
         note = (f"Plackett-Burman, {len(X)} runs; a main effect correlates with a two-factor "
                 f"interaction by up to {partial_aliasing(X):.2f}")
-        return two_level_effects(space, table, y, [note], {})
+        return two_level_effects(space, table, y, [note], alias_table(X, space.names))

@@ -290,3 +290,26 @@ def test_a_reference_that_predicts_poorly_is_named():
     (note,) = reference_notes(-0.441)
     assert "Q² k-fold -0.441, below 0.5" in note and "--reference-runs" in note
     assert "n/a" in reference_notes(None)[0]
+
+
+def test_plackett_burman_names_its_aliases():
+    """The ``aliased_with`` column was always empty, also where a main effect is one
+    column with two-factor interactions (an 8-run design): checked against the column
+    products; a 12-run design aliases every interaction partly (|r| = 1/3)."""
+    from sensfw.designs.plackett_burman import alias_table
+
+    X = np.asarray(pyDOE3.pbdesign(5), float)
+    table = alias_table(X, list("abcde"))
+    for name, text in table.items():
+        i = "abcde".index(name)
+        for word in filter(None, text.split(", ")):
+            j, m = ("abcde".index(c) for c in word.lstrip("-").split(":"))
+            sign = -1.0 if word.startswith("-") else 1.0
+            np.testing.assert_array_equal(X[:, i], sign * X[:, j] * X[:, m])
+    assert table["a"]
+    space = _unit_space(5)
+    d = make_design("plackett_burman")
+    res = d.analyze(space, d.generate(space), np.arange(8.0))
+    assert res.table["aliased_with"].to_dict() == alias_table(X, space.names)
+    twelve = alias_table(np.asarray(pyDOE3.pbdesign(11), float), [f"x{i}" for i in range(11)])
+    assert all(v == "partly with 45 interaction(s), |r| <= 0.33" for v in twelve.values())
