@@ -60,10 +60,9 @@ def test_rerun_computes_nothing_and_gives_identical_results(quick, cli, tmp_path
     assert after["stages"] == before["stages"]
 
 
-@pytest.mark.slow
-def test_killed_run_resumes_with_only_the_missing_runs(quick, cli, tmp_path):
-    ref, _ = quick
-    out = tmp_path / "killed"
+def _running_quick(out, at_least: int):
+    """``sensfw run`` of the quick study into ``out`` on 2 workers, in a session of its own,
+    returned once ``at_least`` runs are stored (or after 120 s): (process, run store)."""
     proc = subprocess.Popen([sys.executable, "-m", "sensfw", "run", str(QUICK), "--out",
                              str(out), "--workers", "2", "--no-progress"], cwd=ROOT,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
@@ -71,9 +70,17 @@ def test_killed_run_resumes_with_only_the_missing_runs(quick, cli, tmp_path):
     store = out / "runs"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
-        if store.exists() and len(list(store.glob("*.json"))) >= 6:
+        if store.exists() and len(list(store.glob("*.json"))) >= at_least:
             break
         time.sleep(0.05)
+    return proc, store
+
+
+@pytest.mark.slow
+def test_killed_run_resumes_with_only_the_missing_runs(quick, cli, tmp_path):
+    ref, _ = quick
+    out = tmp_path / "killed"
+    proc, store = _running_quick(out, at_least=6)
     os.killpg(proc.pid, signal.SIGKILL)  # the CLI and its workers, at once
     proc.wait()
     done = len(list(store.glob("*.json")))
@@ -369,17 +376,7 @@ def test_a_run_stopped_by_a_signal_leaves_no_worker_behind(cli, tmp_path, sig):
     its process group: the workers, blocked on a result queue nobody read, and the
     forkserver stayed for good (130 MB each). Now SIGTERM stops the run as Ctrl-C does
     (exit 143, finished runs kept) and after either signal the forkserver's workers leave."""
-    out = tmp_path / "sig"
-    proc = subprocess.Popen([sys.executable, "-m", "sensfw", "run", str(QUICK), "--out",
-                             str(out), "--workers", "2", "--no-progress"], cwd=ROOT,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-    store = out / "runs"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        if store.exists() and len(list(store.glob("*.json"))) >= 2:
-            break
-        time.sleep(0.05)
+    proc, _ = _running_quick(tmp_path / "sig", at_least=2)
     servers = _children(proc.pid)
     workers = [w for s in servers for w in _children(s)]
     assert workers, "no pool workers found"

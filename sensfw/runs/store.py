@@ -83,17 +83,12 @@ class RunStore:
     def damaged(self, key: str) -> bool:
         """Whether the store holds a record of ``key`` whose signal file is missing or fails
         its checksum (a disk full, a copy cut short): read as absent, named as damaged."""
-        meta_path, data_path = self._paths(key)
+        meta_path, _ = self._paths(key)
         try:
             meta = json.loads(meta_path.read_text())
         except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
             return False
-        if meta.get("status") != "ok":
-            return False
-        try:
-            return hashlib.sha256(data_path.read_bytes()).hexdigest() != meta.get("sha256")
-        except FileNotFoundError:
-            return True
+        return meta.get("status") == "ok" and self._own_record(key) is None
 
     def has(self, key: str, include_failed: bool = True) -> bool:
         meta = self.record(key)
