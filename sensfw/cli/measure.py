@@ -140,11 +140,17 @@ def compare(
     backend: Backend = None,
     scheduler: Scheduler = None,
     progress: ShowProgress = True,
+    twins: Annotated[int, typer.Option(
+        min=0, help="runs of each record's model on its drive changed by k x 1e-9 (k = 1 .. "
+                    "TWINS), for the model's own scatter: what a model whose response its "
+                    "drive does not determine (stick-slip under random drive) differs from "
+                    "itself by; 0: none")] = 2,
 ) -> None:
     """See where the model fails: FRF error, resonances, harmonics, THD, up/down jumps,
     levels. Records: time data (sweeps, random, stepped sines) or FRFs alone."""
     from ..measure.compare import compare_measurements
     from ..measure.lines import jump_text
+    from ..measure.signatures import THRESHOLDS
     from ..report.measure import write_comparison
     from ..study import Study
 
@@ -156,7 +162,8 @@ def compare(
             if "not the study's" in note or "FRF-only" in note:
                 say(f"notice: {m.file}: {note}", style="yellow")
     with _running(study, out_dir, workers, backend, scheduler, progress) as runner:
-        result = compare_measurements(study, meas, runner, error_band=band)
+        result = compare_measurements(study, meas, runner, error_band=band,
+                                      twins=twins)
     write_comparison(out_dir, study, result)
     lo, hi = result.error_band
     for c in result.levels:
@@ -165,11 +172,20 @@ def compare(
         res = "".join(f"; resonance {r['measured_hz']:.2f} Hz measured, "
                       f"{r['model_hz']:.2f} Hz model" for r in c.resonances
                       if r["measured_hz"] and r["model_hz"])
-        noise = "" if c.error_noise_db is None else \
-            f" (the measurement's noise alone: {c.error_noise_db:.2f} dB)"
+        parts = [] if c.error_noise_db is None else \
+            [f"the measurement's noise alone: {c.error_noise_db:.2f} dB"]
+        if c.error_scatter_db is not None:
+            parts.append(f"the model's own scatter: {c.error_scatter_db:.2f} dB")
+        noise = f" ({'; '.join(parts)})" if parts else ""
+        shift = THRESHOLDS["shift_pct"]
+        loose = [r for r in c.resonances if (r.get("model_scatter_pct") or 0) > shift]
         clo, chi = c.error_band or (lo, hi)  # a record sampled slowly: its own band
         out.print(f"{c.level_text}: FRF error {c.error_db:.2f} dB over {clo:g}-{chi:.4g} Hz"
                   f"{noise}{res}{thd}")
+        if loose:
+            out.print(f"  {len(loose)} of the model's resonances scatter by more than "
+                      f"{shift:g} % when its drive changes by 1e-9: the model does not "
+                      "determine them, and no shift of theirs is evidence")
     for b in result.bands:
         if b.resonance_low is None:
             continue

@@ -47,7 +47,7 @@ from .lines import LONGER, compare_lines, jump, longer_drive
 from .measurement import FRFRecord
 from .prediction import bands, calibration_result, ellipsoid_points
 from .resonance import MIN_FIT_R2, fit_resonances, match_resonances, resonances
-from .signatures import amplitude_dependence
+from .signatures import amplitude_dependence, twin_scatter
 
 __all__ = ["ERROR_DEFINITION", "FRACTIONS", "MIN_FIT_R2", "SMOOTH", "Comparison",
            "LevelComparison",
@@ -173,8 +173,53 @@ def _bands_of(m, band: tuple[float, float], study_fs: float,
     return own, err
 
 
+#: the relative change of a twin run's drive (:func:`twin_drive`): far below any
+#: measurement's resolution, far above the solver's round-off (1e-16)
+TWIN = 1e-9
+
+
+def twin_drive(drive, k: int = 1):
+    """``drive`` scaled by ``1 + k TWIN``: a run that a model determined by its drive gives
+    again to within 1e-9, and one that is not (stick-slip under a random drive: a
+    round-off change of the drive grows to an O(1) change of the response within a tenth
+    of a second on the quick study at 0.5 N) gives as differently as another realisation of
+    itself. The differences of such runs are the model's own scatter
+    (:attr:`~.comparison.LevelComparison.error_scatter_db`)."""
+    from ..excitation import SampledForce
+
+    if isinstance(drive, SampledForce):  # its amplitude is the level it was measured at
+        return replace(drive, gain=drive.gain * (1 + k * TWIN))
+    return drive.with_amplitude(drive.amplitude * (1 + k * TWIN))
+
+
+def _add_twins(study, measurements, runner, values, effects, levels, twins: int) -> None:
+    """Run each record's model again on ``twins`` twin drives (:func:`twin_drive`) and keep
+    the twins' FRFs and peaks in its comparison (``db_twins``, ``peaks_twins``), and in
+    each resonance row the model's own scatter of its frequency (``model_scatter_pct``)."""
+    from ..evaluate import simulate, variant_spec
+
+    specs = [variant_spec(study, dict(values or {}), twin_drive(m.drive, k), effects)
+             for k in range(1, twins + 1) for m in measurements]
+    sims, _ = simulate(runner, specs, "model twins")
+    for i, sig in enumerate(sims):
+        m, c = measurements[i % len(measurements)], levels[i % len(measurements)]
+        if sig is None:  # a twin failed where the model did not: it counts for nothing
+            continue
+        t = compare_level(m.signals, sig, study.output, c.band, m.level, m.file,
+                          error_band=c.error_band)
+        c.db_twins.append(t.db_model if len(t.f) == len(c.f)
+                          else np.interp(c.f, t.f, t.db_model))
+        c.peaks_twins.append(t.peaks_model)
+    for c in levels:
+        for r in c.resonances:
+            if r.get("model_hz") and c.peaks_twins:
+                r["model_scatter_pct"] = twin_scatter({"frequency": r["model_hz"]},
+                                                      c.peaks_twins, None)
+
+
 def compare_measurements(study, measurements, runner, values=None, effects=(),
-                         error_band: tuple[float, float] | None = None) -> Comparison:
+                         error_band: tuple[float, float] | None = None,
+                         twins: int = 0) -> Comparison:
     """Simulate the study's model (with extra ``effects`` and parameter ``values``) for
     every prepared measurement (:func:`sensfw.measure.prepared.load_measurements`) and
     compare:
@@ -184,7 +229,11 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
     sweep where there are two; random records at their RMS in the band). An FRF-only
     record whose model lines have not settled (:data:`~sensfw.measure.lines.SETTLED_DB`) is
     stepped again with twice the dwell, up to :data:`~sensfw.measure.lines.LONGER` times
-    (the runs already made come from the run store)."""
+    (the runs already made come from the run store). With ``twins`` each record's model
+    runs that many times more on :func:`twin_drive` of its drive: its FRF error then states
+    the model's own scatter beside the measurement's noise, and the amplitude dependence
+    does not read a resonance shift that the model itself does not determine as
+    evidence."""
     from ..errors import SensfwError
     from ..evaluate import simulate, variant_spec
 
@@ -211,6 +260,8 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
         if not any([longer_drive(m, c) for m, c in zip(measurements, levels, strict=True)
                     if attempt < LONGER]):
             break
+    if twins:
+        _add_twins(study, measurements, runner, values, effects, levels, twins)
     notes = [f"{m.file}: {n}" for m in measurements for n in m.notes]
     jumps = []
     for lv in sorted({c.level for c in levels}):

@@ -81,6 +81,11 @@ class LevelComparison:
     #: per line of ``f``: the dB error the measurement's own noise gives a correct model
     #: (:func:`sensfw.measure.bands.line_noise_db`), where known
     line_noise: np.ndarray | None = None
+    #: the model's twin runs (its drive scaled by ``1 + k TWIN``,
+    #: :func:`~.compare.twin_drive`) on the lines of ``f``, and their peaks: what the model
+    #: itself does not determine (empty: no twin run)
+    db_twins: list[np.ndarray] = field(default_factory=list)
+    peaks_twins: list[list[dict]] = field(default_factory=list)
 
     dynamic_range: float = 35.0
 
@@ -176,6 +181,21 @@ class LevelComparison:
             return None
         return float(np.sqrt(np.mean(self.line_noise[sel] ** 2)))
 
+    @property
+    def error_scatter_db(self) -> float | None:
+        """The model's own scatter in :attr:`error_db`: the RMS over the same lines of the
+        dB differences between the model and its twins (runs whose drives differ by a
+        relative ``1e-9``; :func:`~.compare.twin_drive`), where there are twins. A model
+        whose response its drive does not determine (stick-slip under a random drive
+        diverges from a round-off change within a tenth of a second) differs from a
+        record of itself by as much: the error a correct model gets is then about
+        ``sqrt(noise_alone^2 + scatter^2)``, not the noise alone."""
+        sel = self.error_lines
+        if not self.db_twins or not sel.any():
+            return None
+        d = np.concatenate([self.db_model[sel] - t[sel] for t in self.db_twins])
+        return float(np.sqrt(np.mean(d * d)))
+
     def frf_rms_db_between(self, fmin: float, fmax: float) -> float:
         """RMS over the lines in ``[fmin, fmax]`` of the dB difference model - measurement
         of the smoothed FRFs (:func:`frf_db`): the error of one band as a user states it
@@ -199,6 +219,7 @@ class LevelComparison:
                                  "definition": ERROR_DEFINITION,
                                  "lines": int(self.error_lines.sum()),
                                  "noise_alone": self.error_noise_db,
+                                 "model_scatter": self.error_scatter_db,
                                  "rms_in_band": self.error_db,
                                  "bands": bands,
                                  "bands_rms": self.frf_rms_db if self.bands else None,

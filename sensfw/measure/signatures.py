@@ -89,6 +89,11 @@ THRESHOLDS = {
     "new_peak_prominence_db": 10.0,
 }
 
+#: standard deviations of the model's own scatter (:func:`twin_scatter`) that a frequency
+#: threshold grows by: two twins give a standard deviation of two degrees of freedom, so
+#: the margin is wide
+TWIN_SIGMAS = 3.0
+
 
 # ---- the table ------------------------------------------------------------------------------
 def track(peak_lists: Sequence[Sequence[dict]], tol: float = TRACK_TOL
@@ -202,6 +207,28 @@ def _values(p: dict | None, q: dict | None) -> tuple:
     return (*get(p), *get(q), "mode fit" if fit else "half-power")
 
 
+def twin_scatter(peak: dict | None, twins: Sequence[Sequence[dict]], method: str | None
+                 ) -> float | None:
+    """The model's own scatter (%) of ``peak``'s frequency from its twin runs
+    (:func:`sensfw.measure.compare.twin_drive`; ``twins``: their peaks): ``100 sqrt(2)``
+    times the standard deviation of ``ln f`` over the model and the twins' nearest peaks
+    (by the same ``method``'s frequencies), i.e. the standard deviation of the difference
+    of two realisations, as a measured-minus-model shift is; infinite where a twin has no
+    peak within :data:`TRACK_TOL` (the model does not determine the peak); ``None``
+    without twins."""
+    if peak is None or not twins:
+        return None
+    key = "fit_frequency" if method == "mode fit" else "frequency"
+    f = peak.get(key) or peak["frequency"]
+    logs = [math.log(f)]
+    for peaks in twins:
+        d = [math.log(q.get(key) or q["frequency"]) for q in peaks]
+        if not d or min(abs(x - logs[0]) for x in d) > TRACK_TOL:
+            return math.inf
+        logs.append(min(d, key=lambda x: abs(x - logs[0])))
+    return float(100 * math.sqrt(2) * np.std(logs, ddof=1))
+
+
 def amplitude_table(levels: Sequence) -> dict:
     """The amplitude-dependence table of model/measurement comparisons at several levels.
 
@@ -225,6 +252,7 @@ def amplitude_table(levels: Sequence) -> dict:
             for c in levels]
     pm = [modes(c.peaks_measured) for c in levels]
     px = [modes(c.peaks_model) for c in levels]
+    pt = [[modes(t) for t in getattr(c, "peaks_twins", ())] for c in levels]
     tm, tx = track(pm), track(px)
     rows = []
     for i, j in pair_tracks(tm, tx, pm, px):
@@ -248,7 +276,8 @@ def amplitude_table(levels: Sequence) -> dict:
                 if both else None,
                 "line_hz": line[lv],
                 "damping_ratio": za / zb if both and za and zb else None,
-                "method": method if (a or b) else None})
+                "method": method if (a or b) else None,
+                "model_scatter_pct": twin_scatter(b, pt[lv], method)})
         kind = "paired" if i is not None and j is not None else \
             "measured only" if i is not None else "model only"
         ref = next(r["measured_hz"] or r["model_hz"] for r in per
@@ -306,6 +335,7 @@ def _trends(table: dict, th: dict, fit: bool = True, half_power: bool = False
         slope = float(np.polyfit(np.log10(lv), s, 1)[0]) if len(set(lv)) > 1 else 0.0
         gd = g[np.isfinite(g)]
         line = max(x.get("line_hz") or 0.0 for x in rows)
+        twin = max(x.get("model_scatter_pct") or 0.0 for x in rows)
         out.append({
             "resonance": r["id"], "frequency_hz": r["frequency_hz"],
             "levels": lv.tolist(), "shift_pct": s.tolist(),
@@ -317,7 +347,9 @@ def _trends(table: dict, th: dict, fit: bool = True, half_power: bool = False
                                            x["model_prominence_db"]) for x in rows)),
             "method": "mode fit" if fit else "half-power",
             # half-power frequencies sit on the FRF's lines: a shift is known to one line
-            "line_pct": 0.0 if fit else 100 * line / r["frequency_hz"]})
+            "line_pct": 0.0 if fit else 100 * line / r["frequency_hz"],
+            # the model's own scatter of the shift at its worst level (its twin runs)
+            "model_scatter_pct": twin})
     return out
 
 
@@ -365,6 +397,11 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
     * ``new_peak``: a measured resonance no model resonance pairs with, at least
       ``new_peak_prominence_db`` prominent.
 
+    Where the levels carry the model's twin runs, every frequency threshold grows by
+    :data:`TWIN_SIGMAS` standard deviations of the model's own scatter of that shift
+    (``model_scatter_pct``; of a trend, ``sqrt(2)`` times it): a shift the model does not
+    determine is no evidence.
+
     Several classes may hold at once. Returns ``{class: evidence}``. ``table``: the
     :func:`amplitude_table` of ``levels`` if already built.
     """
@@ -375,15 +412,23 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
     table = table or amplitude_table(levels)
     found: dict[str, dict] = {}
     trends = _trends(table, th)
-    soft = [t for t in trends if t["shift_trend_pct"] < -th["shift_trend_pct"]]
-    hard = [t for t in trends if t["shift_trend_pct"] > th["shift_trend_pct"]]
+    # a shift the model's twins move is no evidence: a level's shift has the standard
+    # deviation model_scatter_pct, a trend (two levels) sqrt(2) times it; three of them
+    # (infinite where a twin lost the peak)
+    soft = [t for t in trends
+            if t["shift_trend_pct"] < -(th["shift_trend_pct"] + TWIN_SIGMAS * math.sqrt(2)
+                                        * t["model_scatter_pct"])]
+    hard = [t for t in trends
+            if t["shift_trend_pct"] > th["shift_trend_pct"] + TWIN_SIGMAS * math.sqrt(2)
+            * t["model_scatter_pct"]]
     # a resonance whose nonlinearity spoils the single-mode fit at a level (a hardening
     # peak bends and jumps under a sweep): its half-power shifts, each known to one FRF
     # line on either side, so a trend to two lines
     for t in _trends(table, th, fit=False, half_power=True):
         if t["prominence_db"] < th["half_power_trend_prominence_db"]:
             continue
-        margin = th["shift_trend_pct"] + 2 * t["line_pct"]
+        margin = th["shift_trend_pct"] + 2 * t["line_pct"] + \
+            TWIN_SIGMAS * math.sqrt(2) * t["model_scatter_pct"]
         if t["shift_trend_pct"] > margin:
             hard.append(t)
         elif t["shift_trend_pct"] < -margin:
@@ -394,7 +439,8 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
         found["hardening"] = {"resonances": hard}
     flat = []
     for t in trends + _trends(table, th, fit=False):
-        q, fit = t["line_pct"], t["method"] == "mode fit"
+        q, fit = t["line_pct"] + TWIN_SIGMAS * t["model_scatter_pct"], \
+            t["method"] == "mode fit"
         if abs(t["shift_trend_pct"]) > th["shift_trend_pct"] + q or \
                 (fit and t["damping_trend"] is not None and
                  abs(t["damping_trend"]) > th["damping_trend"]):

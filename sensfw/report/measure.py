@@ -34,7 +34,8 @@ def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
                         "measured Hz": x["measured_hz"], "model Hz": x["model_hz"],
                         "measured vs model %": x["shift_pct"], "measured ζ": x["measured_damping"],
                         "model ζ": x["model_damping"], "ζ ratio": x["damping_ratio"],
-                        "method": x["method"]})
+                        "method": x["method"],
+                        "model's own scatter %": x.get("model_scatter_pct")})
     harm = []
     for h in amplitude["table"]["harmonics"]:
         row = {"level": h["level"]}
@@ -49,7 +50,15 @@ def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     def blank(frame):  # empty cells rather than NaN
         return frame.astype(object).where(frame.notna(), "")
 
-    return blank(pd.DataFrame(res)), blank(pd.DataFrame(harm))
+    frame = pd.DataFrame(res)
+    twins = "model's own scatter %"
+    if twins in frame and frame[twins].isna().all():  # no twin runs
+        frame = frame.drop(columns=twins)
+    elif twins in frame:  # infinite: a twin has no peak there
+        frame[twins] = frame[twins].map(
+            lambda v: "a twin has none" if v is not None and np.isinf(v) else v)
+
+    return blank(frame), blank(pd.DataFrame(harm))
 
 
 def amplitude_section(page, amplitude: dict, unit: str = "N") -> None:
@@ -115,14 +124,17 @@ def _summary(comparisons) -> pd.DataFrame:
             "record": c.level_text, "file": Path(c.file).name if c.file else "",
             "FRF error (dB)": f"{c.error_db:.2f}",
             "noise alone (dB)": "" if c.error_noise_db is None else f"{c.error_noise_db:.2f}",
+            "model's own scatter (dB)": "" if c.error_scatter_db is None
+            else f"{c.error_scatter_db:.2f}",
             "resonance measured (Hz)": f"{r['measured_hz']:.2f}" if r else "",
             "model (Hz)": f"{r['model_hz']:.2f}" if r else "",
             "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
             + (f" (noise alone {c.thd_floor:.2f})" if c.thd_floor else "")
             if c.thd_measured is not None and c.thd_model is not None else ""})
     frame = pd.DataFrame(rows)
-    if not (frame["noise alone (dB)"] != "").any():
-        frame = frame.drop(columns="noise alone (dB)")
+    for col in ("noise alone (dB)", "model's own scatter (dB)"):
+        if not (frame[col] != "").any():
+            frame = frame.drop(columns=col)
     return frame
 
 
@@ -198,7 +210,13 @@ def write_compare_report(study, result, path) -> Path:
     page.p(ERROR_DEFINITION + (f" (here {band[0]:g}-{band[1]:g} Hz)" if band else "")
            + ". 'Noise alone': what the measurement's own noise gives a correct model over the "
            "same lines (its noise added to it again, three draws); an error near it is within "
-           "the noise.")
+           "the noise."
+           + (" 'Model's own scatter': the same error between the model and its twins, runs "
+              "whose drives differ by 1e-9 of their level; where it is not near zero the "
+              "model's response is not determined by its drive (stick-slip under a random "
+              "drive), a correct model gets about the root sum of squares of the two, and a "
+              "resonance shift within it is no evidence." if any(
+                  c.error_scatter_db is not None for c in comparisons) else ""))
     if result.notes:
         page.h2("Records and how the model was driven")
         for n in result.notes:
