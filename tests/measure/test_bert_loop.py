@@ -55,7 +55,7 @@ def compare_six_levels(cli, bert, study: Path, out: Path) -> dict:
     """``sensfw compare`` of ``study`` on the six levels, 80-105 Hz error band."""
     args = [a for lv in LEVELS for a in ("-m", bert / f"level_{lv}")]
     proc = cli("compare", study, *args, "--out", out, "--error-band", "80,105",
-               "--workers", 2, "--no-progress", timeout=600)
+               "--workers", 2, "--no-progress", "--twins", 0, timeout=600)
     assert proc.returncode == 0, proc.stderr
     return json.loads((out / "compare.json").read_text())
 
@@ -240,7 +240,7 @@ def test_calibrated_on_both_kinds_the_beam_predicts_the_other_records(bert, cli,
             for a in ("-m", folder / f"level_{lv}")]
     out = tmp_path / "cmp"
     proc = cli("compare", src, *args, "--out", out, "--error-band", "80,105",
-               "--workers", 2, "--no-progress", timeout=900)
+               "--workers", 2, "--no-progress", "--twins", 0, timeout=900)
     assert proc.returncode == 0, proc.stderr
     levels = json.loads((out / "compare.json").read_text())["levels"]
     assert len(levels) == 6
