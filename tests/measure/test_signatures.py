@@ -495,10 +495,6 @@ def test_clearance_below_its_gap_leaves_no_signature(study, runner):
     a clearance anywhere is as invisible.)"""
     cmp = compare(study, runner, "clearance@clutch_drive:clearance_gap=0.0005", [0.03, 0.3])
     assert cmp.amplitude["classes"] == {}
-    write_comparison(tmp_path, study, cmp)
-    html = (tmp_path / "report.html").read_text()
-    assert "model&#x27;s own scatter (dB)" in html or "model's own scatter (dB)" in html
-    assert f"{high.error_scatter_db:.2f}" in html
 
 
 @pytest.mark.slow
