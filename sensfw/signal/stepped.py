@@ -118,7 +118,10 @@ def _fit(x: np.ndarray, t: np.ndarray, f: float, orders: Sequence[int]) -> np.nd
 def _window(step: Step, fs: float, n_max: int, fraction: float) -> tuple[int, int, int]:
     """(first sample, end sample, whole periods) of the fitted end of ``step``."""
     periods = int(np.floor(fraction * (step.end - step.start) * step.frequency + 1e-9))
-    end = min(int(np.floor(step.end * fs + 1e-9)), n_max)
+    if step.end * fs > n_max + 0.5:  # clamping it would fit the samples before the step
+        raise SignalError(f"the step at {step.frequency:.6g} Hz ends at {step.end:.6g} s, "
+                          f"after the record's end ({n_max / fs:.6g} s)")
+    end = int(np.floor(step.end * fs + 1e-9))
     if periods < 1:
         raise SignalError(f"the step at {step.frequency:.6g} Hz dwells "
                           f"{step.end - step.start:.4g} s: less than one period in its "

@@ -131,3 +131,18 @@ def test_steps_of_a_sweep_is_none_and_the_excitation_round_trips():
                                             "amplitude", "tail"}
     with pytest.raises(SignalError, match="direction"):
         SteppedSine(direction="sideways")
+
+
+def test_a_step_past_the_record_is_an_error_not_a_fit_of_the_step_before():
+    """A 1 s record at 97.3 Hz, then 200 Hz from 0.9 s; the 200 Hz step, claimed from 0.9
+    to 1.5 s, was fitted (its last 50 %: 0.3 s) over 0.7-1.0 s of the record, two thirds
+    of it on the 97.3 Hz step (amplitude 0.33 for 1): refused, naming the step and the
+    record's end."""
+    fs = 12345.6
+    t = np.arange(round(fs)) / fs
+    x = np.where(t < 0.9, np.cos(2 * np.pi * 97.3 * t), np.cos(2 * np.pi * 200 * t))
+    with pytest.raises(SignalError, match=r"ends at 1\.5 s, after the record's end"):
+        step_amplitudes(x, fs, Step(0.9, 1.5, 200.0))
+    # a step that ends with the record is fitted as before: amplitude 1 within 1e-9
+    whole, _ = step_amplitudes(x, fs, Step(0.9, len(t) / fs, 200.0))
+    assert abs(whole[0]) == pytest.approx(1.0, abs=1e-9)
