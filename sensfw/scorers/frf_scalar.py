@@ -28,7 +28,8 @@ class _FRFScorer(Scorer):
             (50.0, 5000.0), description="[fmin, fmax] in Hz with 0 <= fmin < fmax")
         estimator: Literal[ESTIMATORS] = Field(
             "Hv", description=choices(ESTIMATORS))
-        eps: Annotated[Float, Field(gt=0)] = Field(1.0, description="a number > 0")
+        eps: Annotated[Float, Field(gt=0, allow_inf_nan=False)] = Field(
+            1.0, description="a finite number > 0")
         nperseg: Annotated[Int, Field(ge=8)] | None = Field(
             None, description="none or an integer >= 8")
         db_ref: Annotated[Float, Field(gt=0)] = Field(1.0, description="a number > 0")
@@ -72,6 +73,11 @@ class _FRFScorer(Scorer):
         f, H = frf(signals.force, self.signal(signals), signals.fs, estimator=o["estimator"],
                    eps=float(o["eps"]), nperseg=o["nperseg"], fmin=float(o["band"][0]),
                    fmax=float(o["band"][1]))
+        if len(f) == 0:
+            raise ScorerError(f"scorer {self.name!r}: band [{o['band'][0]:g}, "
+                              f"{o['band'][1]:g}] Hz holds no line of the FRF (fs = "
+                              f"{signals.fs:g} Hz, {len(signals.force)} samples)",
+                              option="band")
         mag = np.abs(H)
         if not np.all(np.isfinite(mag)) or np.any(mag == 0):
             raise ScorerError(f"scorer {self.name!r}: the FRF is zero or undefined in the band "

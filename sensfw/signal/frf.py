@@ -121,8 +121,9 @@ def hv_from_spectra(spp, sxx, spx, eps: float = 1.0) -> np.ndarray:
     ``Hv = 2 Spx / (sqrt(a^2+b) - a)`` (-> H1 as eps -> 0); for ``a >= 0`` Eq. 8 is used as
     printed (-> H2 as eps -> inf).
     """
-    if not eps > 0:
-        raise SignalError(f"eps must be > 0, got {eps}")
+    if not (np.isfinite(eps) and eps > 0):  # eps = inf: (inf + inf) / inf = NaN
+        raise SignalError(f"eps must be a finite number > 0, got {eps} (eps -> inf is H2: "
+                          "estimator='H2')")
     spp, sxx = np.asarray(spp, float), np.asarray(sxx, float)
     spx = np.asarray(spx, complex)
     a = eps * sxx - spp

@@ -92,3 +92,24 @@ def test_unknown_scorer_and_bad_options_are_clear():
         make_scorer("rms", channel="nope").score(harmonic_signals(0.1))
     with pytest.raises(SensfwError, match=r"needs.*reference|compares with a reference"):
         make_scorer("frf_scalar").score(harmonic_signals(0.1))
+
+
+def test_frf_scorers_refuse_a_band_without_lines_and_an_infinite_eps(run):
+    """A band above the signals' Nyquist frequency (10 kHz here; the check against the
+    study's excitation does not see a record at another rate) gave NaN (the mean of
+    nothing); eps = inf gave an all-NaN Hv ((inf + inf) / inf) reported as 'no excitation'.
+    Both are errors naming the option."""
+    for name in ("frf_scalar", "frf_db_rms"):
+        s = make_scorer(name, channel="a1", band=[12000.0, 15000.0])
+        with pytest.raises(SensfwError, match=r"band \[12000, 15000\] Hz holds no line"):
+            s.score(run, run)
+        with pytest.raises(SensfwError, match="eps must be"):
+            make_scorer(name, channel="a1", eps=float("inf"))
+    with pytest.raises(SensfwError, match="eps must be a finite number > 0"):
+        frf(run.force, run.channels["a1"], run.fs, eps=np.inf)
+    # a large finite eps is H2 (eps -> inf), within 1e-9 relative where |Spx| > 0
+    _f, h2 = frf(run.force, run.channels["a1"], run.fs, estimator="H2", nperseg=2048,
+                fmin=60, fmax=1900)
+    _, hv = frf(run.force, run.channels["a1"], run.fs, eps=1e15, nperseg=2048, fmin=60,
+                fmax=1900)
+    assert np.max(np.abs(hv / h2 - 1)) < 1e-9
