@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..plugins import scorers
+from ..signal._checks import as_signal
 from .base import Scorer
+
+
+def _samples(scorer: Scorer, signals) -> np.ndarray:
+    """The scored channel, one or more finite samples (NaN would pass into the scores)."""
+    return as_signal(scorer.signal(signals), f"scorer {scorer.name!r}: channel "
+                     f"{scorer.channel or next(iter(signals.channels))!r}", min_len=1)
 
 
 @scorers.register("rms")
@@ -16,7 +23,7 @@ class RMS(Scorer):
     name = "rms"
 
     def score(self, signals, reference=None):
-        x = self.signal(signals)
+        x = _samples(self, signals)
         return {"value": float(np.sqrt(np.mean(x**2)))}
 
 
@@ -27,4 +34,4 @@ class Value(Scorer):
     name = "value"
 
     def score(self, signals, reference=None):
-        return {"value": float(np.mean(self.signal(signals)))}
+        return {"value": float(np.mean(_samples(self, signals)))}

@@ -113,3 +113,21 @@ def test_frf_scorers_refuse_a_band_without_lines_and_an_infinite_eps(run):
     _, hv = frf(run.force, run.channels["a1"], run.fs, eps=1e15, nperseg=2048, fmin=60,
                 fmax=1900)
     assert np.max(np.abs(hv / h2 - 1)) < 1e-9
+
+
+def test_rms_and_value_refuse_nan_and_empty_channels():
+    """A NaN sample made the RMS and the mean NaN (a score table entry, silently); an
+    empty channel gave NaN and a RuntimeWarning. RMS of a sine of amplitude 2 with a DC
+    offset of 0.5: sqrt(0.5^2 + 2^2 / 2) (Parseval), to 1e-12 on 200 whole periods."""
+    t = np.arange(20000) / 1000.0
+    x = 0.5 + 2 * np.sin(2 * np.pi * 10 * t)
+    sig = Signals(t=t, force=x, channels={"y": x}, fs=1000.0)
+    assert make_scorer("rms", channel="y").score(sig)["value"] == pytest.approx(
+        np.sqrt(0.25 + 2.0), rel=1e-12)
+    bad = Signals(t=t, force=x, channels={"y": np.where(t > 3, np.nan, x)}, fs=1000.0)
+    for name in ("rms", "value"):
+        with pytest.raises(SensfwError, match=rf"scorer '{name}': channel 'y' contains NaN"):
+            make_scorer(name, channel="y").score(bad)
+        empty = Signals(t=t[:0], force=x[:0], channels={"y": x[:0]}, fs=1000.0)
+        with pytest.raises(SensfwError, match="has 0 samples"):
+            make_scorer(name, channel="y").score(empty)
