@@ -104,8 +104,15 @@ def spectra(x_in, x_out, fs: float, nperseg: int | None = None, noverlap: int | 
     nperseg = int(nperseg)
     if not 8 <= nperseg <= n:
         raise SignalError(f"nperseg={nperseg} must be between 8 and the record length {n}")
+    if noverlap is not None and not 0 <= noverlap < nperseg:
+        raise SignalError(f"noverlap={noverlap} must be between 0 and nperseg - 1 "
+                          f"({nperseg - 1})")
     kw = dict(fs=fs, window=window, nperseg=nperseg, noverlap=noverlap, detrend=False)
-    f, spx = csd(p, x, **kw)
+    try:
+        f, spx = csd(p, x, **kw)
+    except ValueError as err:  # scipy's window checks: an unknown name, a wrong length
+        raise SignalError(f"window {window!r} for segments of {nperseg} samples: {err}"
+                          ) from None
     _, spp = welch(p, **kw)
     _, sxx = welch(x, **kw)
     if p.ndim == 2:  # equal-weight linear average over records (each has the same segments)
