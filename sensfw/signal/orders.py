@@ -237,6 +237,9 @@ def thd_from_spectrum(orders: np.ndarray, P: np.ndarray, n_harmonics: int | None
 def _thd(P: dict[int, float], n_harmonics: int | None, unit: str) -> float:
     if unit not in ("percent", "dBc"):
         raise SignalError(f"unknown THD unit {unit!r}; use 'percent' or 'dBc'")
+    if n_harmonics is not None and not int(n_harmonics) >= 2:  # no harmonic: 0 %, -inf dBc
+        raise SignalError(f"n_harmonics must be >= 2 (it counts the fundamental), got "
+                          f"{n_harmonics}")
     top = max(P) if P else 0
     if top < 2:
         raise SignalError("no harmonic below Nyquist: THD needs fs > 4 max(f_inst)")

@@ -75,3 +75,17 @@ def test_bad_inputs():
         order_spectrum(x, FS, fi, amplitude="loud")
     with pytest.raises(SignalError, match="order_resolution"):
         order_spectrum(x, FS, fi, order_resolution=0.3)
+
+
+def test_thd_over_fewer_than_two_harmonics_is_an_error():
+    """n_harmonics counts the fundamental: 1 (or 0) leaves no harmonic, and THD came out
+    0 % and -inf dBc (with a RuntimeWarning). With 2 it is 100 A2 (A1 = 1), and the
+    default takes every order below Nyquist: 100 sqrt(A2^2 + A3^2) = 11.18 %, both to
+    1e-6 (flat-top amplitudes of stationary orders)."""
+    x, fi = swept(2000.0)
+    for n in (0, 1):
+        for unit in ("percent", "dBc"):
+            with pytest.raises(SignalError, match=f"n_harmonics must be >= 2.*got {n}"):
+                thd(x, FS, fi, n_harmonics=n, unit=unit)
+    assert thd(x, FS, fi, n_harmonics=2) == pytest.approx(100 * A2, rel=1e-6)
+    assert thd(x, FS, fi) == pytest.approx(100 * np.hypot(A2, A3), rel=1e-6)
