@@ -115,8 +115,8 @@ def _checked(x, fs, f_inst, order_resolution, amplitude, overlap):
         raise SignalError(f"unknown amplitude {amplitude!r}; use one of {AMPLITUDES}")
     if np.any(fr <= 0):
         raise SignalError("f_inst must be positive")
-    W = 1.0 / order_resolution
-    if abs(W - round(W)) > 1e-9 or W < 2:
+    W = 1.0 / order_resolution if order_resolution > 0 else 0.0
+    if not np.isfinite(W) or abs(W - round(W)) > 1e-9 or W < 2:
         raise SignalError(f"order_resolution must be 1/W for an integer W >= 2, "
                           f"got {order_resolution}")
     if not 0 <= overlap < 1:
@@ -217,6 +217,8 @@ def harmonic_amplitudes(x, fs: float, f_inst, harmonics=None, detrend: bool = Fa
         return values
     out = {}
     for k in harmonics:
+        if k != int(k) or k < 1:
+            raise SignalError(f"harmonics are integer orders >= 1, got {k}")
         if int(k) not in values:
             raise SignalError(f"order {k} is above the highest unaliased order {top} "
                               f"(fs/(2 max f_inst))")
@@ -228,6 +230,10 @@ def thd_from_spectrum(orders: np.ndarray, P: np.ndarray, n_harmonics: int | None
                       unit: str = "percent") -> float:
     """Eq. 12 from an RMS order spectrum ``(orders, P)`` (as returned by
     :func:`order_spectrum`), over the integer orders it contains."""
+    orders, P = np.asarray(orders, float), np.asarray(P, float)
+    if orders.ndim != 1 or orders.shape != P.shape or len(orders) < 2:
+        raise SignalError(f"orders and P must be 1-D, equally long and hold two or more "
+                          f"orders (got shapes {orders.shape} and {P.shape})")
     res = orders[1] - orders[0]
     top = int(np.floor(orders[-1] + 1e-9))
     values = {k: float(P[round(k / res)]) for k in range(1, top + 1)}

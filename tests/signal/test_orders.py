@@ -5,7 +5,13 @@ import pytest
 
 from sensfw.errors import SignalError
 from sensfw.excitation import chirp_phase, log_chirp
-from sensfw.signal import harmonic_amplitudes, order_map, order_spectrum, thd
+from sensfw.signal import (
+    harmonic_amplitudes,
+    order_map,
+    order_spectrum,
+    thd,
+    thd_from_spectrum,
+)
 
 FS = 20000.0
 A2, A3 = 0.1, 0.05
@@ -89,3 +95,22 @@ def test_thd_over_fewer_than_two_harmonics_is_an_error():
                 thd(x, FS, fi, n_harmonics=n, unit=unit)
     assert thd(x, FS, fi, n_harmonics=2) == pytest.approx(100 * A2, rel=1e-6)
     assert thd(x, FS, fi) == pytest.approx(100 * np.hypot(A2, A3), rel=1e-6)
+
+
+def test_bad_order_arguments_are_signal_errors():
+    """order_resolution 0 raised ZeroDivisionError; harmonic 1.5 was read as order 1 (its
+    amplitude 0.707 returned as if it were 1.5's) and order 0 was called 'above the highest
+    unaliased order'; an order spectrum with P of another length raised IndexError."""
+    x, fi = swept(2000.0)
+    for res in (0.0, -1 / 16, float("nan")):
+        with pytest.raises(SignalError, match="order_resolution must be 1/W"):
+            order_map(x, FS, fi, order_resolution=res)
+    for k in (0, 1.5):
+        with pytest.raises(SignalError, match=f"integer orders >= 1, got {k}"):
+            harmonic_amplitudes(x, FS, fi, harmonics=[k])
+    assert harmonic_amplitudes(x, FS, fi, harmonics=[2.0])[2] == pytest.approx(
+        A2 / np.sqrt(2), rel=1e-6)
+    orders, P = order_spectrum(x, FS, fi)
+    with pytest.raises(SignalError, match="equally long"):
+        thd_from_spectrum(orders, P[:40])
+    assert thd_from_spectrum(orders, P) == pytest.approx(100 * np.hypot(A2, A3), rel=1e-6)
