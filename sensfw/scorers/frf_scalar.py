@@ -70,7 +70,13 @@ class _FRFScorer(Scorer):
     def db(self, signals: Signals) -> tuple[np.ndarray, np.ndarray]:
         """FRF magnitude in dB re ``db_ref`` over the band, and the frequencies."""
         o = self.options
-        f, H = frf(signals.force, self.signal(signals), signals.fs, estimator=o["estimator"],
+        x = self.signal(signals)
+        for what, v in (("the force", signals.force),
+                        (f"channel {self.channel or next(iter(signals.channels))!r}", x)):
+            if len(v) and not np.any(v):
+                raise ScorerError(f"scorer {self.name!r}: {what} is zero throughout: its FRF "
+                                  "has no magnitude in dB")
+        f, H = frf(signals.force, x, signals.fs, estimator=o["estimator"],
                    eps=float(o["eps"]), nperseg=o["nperseg"], fmin=float(o["band"][0]),
                    fmax=float(o["band"][1]))
         if len(f) == 0:

@@ -131,3 +131,19 @@ def test_rms_and_value_refuse_nan_and_empty_channels():
         empty = Signals(t=t[:0], force=x[:0], channels={"y": x[:0]}, fs=1000.0)
         with pytest.raises(SensfwError, match="has 0 samples"):
             make_scorer(name, channel="y").score(empty)
+
+
+def test_frf_scorers_name_the_signal_that_is_zero(run):
+    """A response channel of zeros (a sensor not connected) was reported as 'no excitation
+    there?', blaming the force; each zero signal is named."""
+    quiet = Signals(t=run.t, force=run.force, channels={**run.channels,
+                                                        "a1": 0 * run.channels["a1"]},
+                    fs=run.fs)
+    silent = Signals(t=run.t, force=0 * run.force, channels=run.channels, fs=run.fs)
+    for name in ("frf_scalar", "frf_db_rms"):
+        s = make_scorer(name, channel="a1", band=[60.0, 1900.0])
+        with pytest.raises(SensfwError, match="channel 'a1' is zero throughout"):
+            s.score(quiet, run)
+        with pytest.raises(SensfwError, match="the force is zero throughout"):
+            s.score(silent, run)
+        assert s.score(run, run)["value"] == 0.0
