@@ -33,6 +33,9 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.signal import butter, hilbert, sosfiltfilt
 
+from ..errors import SignalError
+from ._checks import as_signal, check_fs
+
 
 @dataclass(frozen=True)
 class SweepEstimate:
@@ -167,15 +170,25 @@ def estimate_sweep(x: np.ndarray, fs: float, band: tuple[float, float] | None = 
         ``[band[0] / 2, min(2 band[1], 0.45 fs)]`` first (default: 0.5 Hz to 0.45 fs).
     max_residual : RMS phase residual (rad) above which the record is not a sweep.
 
-    See the module docstring for the method. Raises nothing on odd input: a silent or
-    broadband record comes back with ``kind = "random"`` or ``"silent"``.
+    See the module docstring for the method. A silent or broadband record comes back with
+    ``kind = "silent"`` or ``"random"``; a :class:`~sensfw.errors.SignalError` means a
+    record that cannot be read at all (NaN or inf, a band above 0.45 ``fs``, too short for
+    the band-pass).
     """
-    x = np.asarray(x, float)
+    x = as_signal(x, "x")
+    fs = check_fs(fs)
     offset = float(np.median(x))
     lo = 0.5 if band is None else max(0.5, band[0] / 2)
     hi = 0.45 * fs if band is None else min(2 * band[1], 0.45 * fs)
+    if not lo < hi:
+        raise SignalError(f"the band-pass {lo:g}-{hi:g} Hz is empty: band {band} Hz is not "
+                          f"below 0.45 fs = {0.45 * fs:g} Hz")
     sos = butter(4, [lo, hi], btype="bandpass", fs=fs, output="sos")
-    y = sosfiltfilt(sos, x - offset)
+    try:
+        y = sosfiltfilt(sos, x - offset)
+    except ValueError as err:  # scipy: the record is shorter than the filter's padding
+        raise SignalError(f"x has {len(x)} samples, too few for the band-pass: {err}"
+                          ) from None
     if not np.any(y):
         return SweepEstimate("silent", math.nan, math.nan, 0.0, 0.0, math.inf, 0.0, 0.0,
                              offset)
