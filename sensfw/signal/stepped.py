@@ -34,6 +34,7 @@ import numpy as np
 from scipy.signal import butter, hilbert, sosfiltfilt
 
 from ..errors import SignalError
+from ._checks import as_signal, same_length
 
 #: the part of each step that is fitted (its end); the rest lets the transient decay
 FIT_FRACTION = 0.5
@@ -159,8 +160,14 @@ def stepped_frf(force: np.ndarray, responses: dict[str, np.ndarray], fs: float,
     """The steady-state FRF of every response channel on ``steps`` (module docstring)."""
     if not steps:
         raise SignalError("a stepped-sine record needs at least one step")
-    k1 = list(orders).index(1)
+    if 1 not in orders:
+        raise SignalError(f"orders {tuple(orders)} must hold 1 (the FRF's line)")
     names = list(responses)
+    force = as_signal(force, "force")
+    for n in names:
+        same_length(force, as_signal(responses[n], f"response {n!r}"), "force",
+                    f"response {n!r}")
+    k1 = list(orders).index(1)
     x = np.column_stack([force, *(responses[n] for n in names)])
     fits = [step_amplitudes(x, fs, s, orders, fraction) for s in steps]
     whole = np.array([w for w, _ in fits])  # (steps, orders, 1 + channels)

@@ -146,3 +146,21 @@ def test_a_step_past_the_record_is_an_error_not_a_fit_of_the_step_before():
     # a step that ends with the record is fitted as before: amplitude 1 within 1e-9
     whole, _ = step_amplitudes(x, fs, Step(0.9, len(t) / fs, 200.0))
     assert abs(whole[0]) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_stepped_frf_checks_its_records():
+    """A response with a NaN gave a NaN line silently; a response of another length and
+    orders without 1 raised numpy's and list's ValueError. A clean record: the line of
+    0.5 cos(...) over cos(...) is 0.5 to 1e-12."""
+    fs = 5000.0
+    t = np.arange(5000) / fs
+    force = np.cos(2 * np.pi * 120 * t)
+    steps = [Step(0.0, 1.0, 120.0)]
+    assert stepped_frf(force, {"y": 0.5 * force}, fs, steps).frf["y"][0] == pytest.approx(
+        0.5, abs=1e-12)
+    with pytest.raises(SignalError, match="response 'y' contains NaN"):
+        stepped_frf(force, {"y": np.where(t > 0.7, np.nan, force)}, fs, steps)
+    with pytest.raises(SignalError, match="force has 5000 samples but response 'y' has 4990"):
+        stepped_frf(force, {"y": force[:-10]}, fs, steps)
+    with pytest.raises(SignalError, match=r"orders \(2, 3\) must hold 1"):
+        stepped_frf(force, {"y": force}, fs, steps, orders=(2, 3))
