@@ -216,6 +216,11 @@ def octave_smooth(f, H, fraction: int = 24) -> np.ndarray:
     FRF of 0/0 for a force without DC) is left out of every window."""
     f = np.asarray(f, float)
     p = np.abs(np.asarray(H)) ** 2
+    if f.ndim != 1 or f.shape != p.shape:
+        raise SignalError(f"f and H must be 1-D and equally long (got {f.shape}, {p.shape})")
+    if not (np.isfinite(fraction) and fraction > 0):
+        raise SignalError(f"fraction (windows of 1/fraction octave) must be > 0, got "
+                          f"{fraction!r}")
     p = np.where((f > 0) & np.isfinite(p), p, 0.0)
     c = np.concatenate([[0.0], np.cumsum(p)])
     half = 2 ** (0.5 / fraction)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from sensfw.errors import SignalError
-from sensfw.signal import coherence, frf, spectra
+from sensfw.signal import coherence, frf, octave_smooth, spectra
 
 FS = 1024.0
 
@@ -99,3 +99,17 @@ def test_bad_spectrogram_settings_are_signal_errors():
         spectrogram(x, FS, noverlap=448)  # nperseg 512 shortened to the record's 100
     with pytest.raises(SignalError, match="window 'xx'"):
         spectrogram(x, FS, window="xx")
+
+
+def test_octave_smooth_checks_its_arguments():
+    """fraction 0 raised ZeroDivisionError and H of another length numpy's broadcast
+    error. A flat |H| = 2 stays 2 to 1e-12 (energy average of a constant) from 1 Hz on;
+    the 0 Hz bin has no octave around it and reads 0."""
+    f = np.arange(0, 100, 0.5)
+    np.testing.assert_allclose(octave_smooth(f, 2 * np.ones_like(f), 3)[2:], 2.0,
+                               rtol=1e-12)
+    for bad in (0, -3, float("nan")):
+        with pytest.raises(SignalError, match=r"fraction .* must be > 0"):
+            octave_smooth(f, np.ones_like(f), bad)
+    with pytest.raises(SignalError, match="equally long"):
+        octave_smooth(f, np.ones(9))
