@@ -114,8 +114,9 @@ def sdof_fit(f, H, f_peak: float | None = None, zeta0: float = 0.02,
         raise SignalError(f"residual_terms must be 1 or 2, got {residual_terms!r}")
     f = np.asarray(f, float)
     H = np.asarray(H, complex)
-    if f.shape != H.shape or f.ndim != 1:
-        raise SignalError(f"f and H must be 1-D and equally long (got {f.shape}, {H.shape})")
+    if f.shape != H.shape or f.ndim != 1 or len(f) < min_lines:
+        raise SignalError(f"f and H must be 1-D, equally long and hold min_lines = "
+                          f"{min_lines} lines or more (got {f.shape}, {H.shape})")
     df = float(np.median(np.diff(f)))
     zeta0 = float(np.clip(zeta0 if zeta0 and np.isfinite(zeta0) else 0.02, 1e-3, 0.2))
     if band is not None:

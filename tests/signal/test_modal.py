@@ -121,3 +121,11 @@ def test_bad_band_or_quantity_is_a_clear_error():
         sdof_fit(f, two_modes(f, 1), band=(90.0, 90.15))
     with pytest.raises(SignalError, match="quantity must be"):
         sdof_fit(f, two_modes(f, 1), band=(86.0, 104.0), quantity="jerk")
+
+
+def test_an_frf_of_too_few_lines_is_a_signal_error():
+    """An empty FRF raised IndexError (after numpy's 'Mean of empty slice'); one line was
+    'f_peak outside the FRF's 97-97 Hz'."""
+    for f in (np.array([]), np.array([97.0])):
+        with pytest.raises(SignalError, match="hold min_lines = 7 lines or more"):
+            sdof_fit(f, f * (1 + 0j), f_peak=97.0)
