@@ -41,8 +41,16 @@ class Scorer(ABC):
         :class:`~sensfw.excitation.Chirp`) before anything runs; raise :class:`ScorerError`
         with ``option=`` naming the option."""
 
+    def channel_name(self, signals: Signals) -> str:
+        """The scored channel: ``channel``, or the signals' first sensor channel."""
+        name = self.channel or next(iter(signals.channels), None)
+        if name is None:
+            raise ScorerError(f"scorer {self.name!r}: the signals hold no sensor channel "
+                              "(only the force); name one with channel='force'")
+        return name
+
     def signal(self, signals: Signals):
-        name = self.channel or next(iter(signals.channels))
+        name = self.channel_name(signals)
         try:
             return signals.channel(name)
         except SensfwError as err:

@@ -12,7 +12,7 @@ from .base import Scorer
 def _samples(scorer: Scorer, signals) -> np.ndarray:
     """The scored channel, one or more finite samples (NaN would pass into the scores)."""
     return as_signal(scorer.signal(signals), f"scorer {scorer.name!r}: channel "
-                     f"{scorer.channel or next(iter(signals.channels))!r}", min_len=1)
+                     f"{scorer.channel_name(signals)!r}", min_len=1)
 
 
 @scorers.register("rms")

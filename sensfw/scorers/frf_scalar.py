@@ -72,7 +72,7 @@ class _FRFScorer(Scorer):
         o = self.options
         x = self.signal(signals)
         for what, v in (("the force", signals.force),
-                        (f"channel {self.channel or next(iter(signals.channels))!r}", x)):
+                        (f"channel {self.channel_name(signals)!r}", x)):
             if len(v) and not np.any(v):
                 raise ScorerError(f"scorer {self.name!r}: {what} is zero throughout: its FRF "
                                   "has no magnitude in dB")

@@ -147,3 +147,14 @@ def test_frf_scorers_name_the_signal_that_is_zero(run):
         with pytest.raises(SensfwError, match="the force is zero throughout"):
             s.score(silent, run)
         assert s.score(run, run)["value"] == 0.0
+
+
+def test_signals_without_a_sensor_channel_are_a_scorer_error():
+    """Signals holding the force only: the default channel (the first sensor) raised a bare
+    StopIteration from every scorer; the force itself can still be named (its RMS: 1)."""
+    t = np.arange(100) / 100.0
+    s = Signals(t=t, force=np.ones(100), channels={}, fs=100.0)
+    for name in ("rms", "value", "thd", "order_amplitude", "frf_scalar", "frf_db_rms"):
+        with pytest.raises(SensfwError, match=f"scorer '{name}': the signals hold no sensor"):
+            make_scorer(name).score(s, s)
+    assert make_scorer("rms", channel="force").score(s)["value"] == 1.0
