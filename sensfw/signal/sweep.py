@@ -10,7 +10,8 @@ of the band-passed record, which is insensitive to all of these:
    +-20 % drift stays far above that; a silent tail or a pre-trigger pause falls below);
 3. the unwrapped phase ``phi(t)`` over the inner 90 % of the active part is fitted by the
    exponential-sweep model ``phi0 + B (exp(k tau) - 1)`` (Eq. 7 in the form of
-   :mod:`sensfw.excitation`; ``B`` and ``phi0`` linear, ``k`` by a bounded scalar search) and
+   :mod:`sensfw.excitation`; ``B`` and ``phi0`` linear, ``k`` by a bounded scalar search,
+   once for ``k > 0`` and once for ``k < 0``: a sweep up or down) and
    by the linear-sweep model ``phi0 + 2 pi (f_a tau + r tau^2 / 2)`` (linear least
    squares); the smaller phase residual decides the kind. Phase noise from additive noise
    of relative level ``s`` is about ``s`` rad per sample and averages down over thousands of
@@ -110,21 +111,22 @@ def _crossing(env: np.ndarray, i: int, level: float, rising: bool) -> float:
     return float(j + (level - env[j]) / (env[i] - env[j]) * (i - j))
 
 
-def _fit_log(tau: np.ndarray, phi: np.ndarray, k_max: float) -> tuple[float, float, float,
-                                                                      float]:
-    """(k, B, phi0, rms residual) of ``phi0 + B (exp(k tau) - 1)``."""
+def _fit_log(tau: np.ndarray, phi: np.ndarray, k_max: float, sign: float = 1.0
+             ) -> tuple[float, float, float, float]:
+    """(k, B, phi0, rms residual) of ``phi0 + B (exp(k tau) - 1)`` with ``k`` of the sign
+    ``sign`` (> 0: an upward sweep, < 0: a downward one)."""
 
     def solve(k):
-        g = np.expm1(k * tau) / k if k > 1e-9 else tau
+        g = np.expm1(k * tau) / k if abs(k) > 1e-9 else tau
         A = np.column_stack([np.ones_like(tau), g])
         coef, *_ = np.linalg.lstsq(A, phi, rcond=None)
         r = phi - A @ coef
         return float(np.sqrt(np.mean(r * r))), coef
 
-    res = minimize_scalar(lambda lk: solve(math.exp(lk))[0], bounds=(math.log(1e-4),
-                                                                     math.log(k_max)),
-                          method="bounded", options={"xatol": 1e-10})
-    k = math.exp(res.x)
+    res = minimize_scalar(lambda lk: solve(math.copysign(math.exp(lk), sign))[0],
+                          bounds=(math.log(1e-4), math.log(k_max)), method="bounded",
+                          options={"xatol": 1e-10})
+    k = math.copysign(math.exp(res.x), sign)
     err, (phi0, bk) = solve(k)  # the fit's coefficient is B k (= 2 pi f at tau = 0)
     return k, float(bk) / k, float(phi0), err
 
@@ -210,7 +212,9 @@ def estimate_sweep(x: np.ndarray, fs: float, band: tuple[float, float] | None = 
     tau = idx / fs - t_start
     if phi[-1] < phi[0]:  # a sweep read backwards: conjugate
         phi = -phi
-    k, b, phi0, res_log = _fit_log(tau, phi, k_max=50.0 / max(t_end - t_start, 1e-6))
+    k_max = 50.0 / max(t_end - t_start, 1e-6)
+    k, b, phi0, res_log = min((_fit_log(tau, phi, k_max, sign) for sign in (1.0, -1.0)),
+                              key=lambda fit: fit[3])  # up or down
     lin, res_lin = _fit_linear(tau, phi)
     duration = t_end - t_start
     if min(res_log, res_lin) > max_residual:

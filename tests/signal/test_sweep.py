@@ -42,3 +42,20 @@ def test_unreadable_records_are_signal_errors():
         estimate_sweep(chirp()[600:620], FS)
     with pytest.raises(SignalError, match="sample rate"):
         estimate_sweep(chirp(), 0.0)
+
+
+def test_a_downward_log_chirp_is_read_back():
+    """A 500-10 Hz log chirp (the 10-500 Hz one's phase read backwards) was 'random'
+    (residual 76 rad): the log model allowed k > 0 only. Now f0, f1 to 0.1 % and 0.5 %,
+    start to 0.5 ms; an upward chirp is read as before."""
+    T, delay = 4.0, 0.25
+    t = np.arange(round((delay + T + 0.25) * FS)) / FS
+    u = np.clip(t - delay, 0.0, T)
+    phi = chirp_phase(np.full_like(u, T), 10.0, 500.0, T) - chirp_phase(T - u, 10.0, 500.0, T)
+    x = np.where((t >= delay) & (t <= delay + T), np.sin(phi), 0.0)
+    e = estimate_sweep(x, FS)
+    assert e.kind == "log_chirp"
+    assert e.f0 == pytest.approx(500.0, rel=1e-3)
+    assert e.f1 == pytest.approx(10.0, rel=5e-3)
+    assert e.t_start == pytest.approx(delay, abs=5e-4)
+    assert e.frequency(np.array([delay + T / 2]))[0] == pytest.approx(np.sqrt(5000), rel=5e-3)
