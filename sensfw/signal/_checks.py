@@ -20,10 +20,13 @@ def as_signal(x, name: str, min_len: int = 8) -> np.ndarray:
 
 
 def check_fs(fs: float) -> float:
-    fs = float(fs)
-    if not (np.isfinite(fs) and fs > 0):
-        raise SignalError(f"sample rate fs must be a positive number, got {fs}")
-    return fs
+    try:
+        value = float(fs)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not (np.isfinite(value) and value > 0):
+        raise SignalError(f"sample rate fs must be a positive number, got {fs!r}")
+    return value
 
 
 def same_length(a: np.ndarray, b: np.ndarray, na: str, nb: str) -> None:

@@ -113,3 +113,11 @@ def test_octave_smooth_checks_its_arguments():
             octave_smooth(f, np.ones_like(f), bad)
     with pytest.raises(SignalError, match="equally long"):
         octave_smooth(f, np.ones(9))
+
+
+def test_a_sample_rate_that_is_no_number_is_a_signal_error(frames):
+    """fs = 'abc' (a unit left in a string) or None raised float()'s ValueError/TypeError."""
+    p, x, _ = frames
+    for fs in ("abc", None, -1.0):
+        with pytest.raises(SignalError, match="sample rate fs must be a positive number"):
+            frf(p[0], x[0], fs)
