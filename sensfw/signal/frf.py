@@ -7,9 +7,12 @@ spectra ``Spp``, ``Sxx`` and the cross spectrum ``Spx = E[P* X]`` (scipy ``csd(p
 * ``H1 = Spx / Spp`` (unbiased by output noise),
 * ``H2 = Sxx / Sxp`` (unbiased by input noise),
 * ``Hv(eps) = ((eps Sxx - Spp) + sqrt((eps Sxx - Spp)^2 + 4 eps |Spx|^2)) / (2 eps Sxp)``
-  (Eq. 8), the total-least-squares estimator for a noise-variance ratio ``eps``: ``eps -> 0``
-  gives H1, ``eps -> inf`` gives H2, ``eps = 1`` is the eigenvector estimate (the FRF from
-  the eigenvector of the smallest eigenvalue of ``[[Spp, Spx], [Sxp, Sxx]]``).
+  (Eq. 8), the total-least-squares estimator for the noise-variance ratio
+  ``eps = var(input noise) / var(output noise)`` (it is the ``eps = 1`` estimate of ``p`` and
+  ``sqrt(eps) x``, divided by ``sqrt(eps)``: consistent when ``eps var(output noise)`` equals
+  the input's): ``eps -> 0`` (no input noise) gives H1, ``eps -> inf`` (no output noise)
+  gives H2, ``eps = 1`` is the eigenvector estimate (the FRF from the eigenvector of the
+  smallest eigenvalue of ``[[Spp, Spx], [Sxp, Sxx]]``).
 
 MATLAB's ``modalfrf(..., 'Estimator', 'Hv')`` is a different quantity (magnitude
 ``sqrt(|H1||H2|)`` with the phase of ``Spx``); it coincides with ``Hv(1)`` only when the
@@ -158,7 +161,8 @@ def frf(x_in, x_out, fs: float, estimator: str = "Hv", eps: float = 1.0,
     estimator : {"H1", "H2", "Hv"}
         See the module docstring; "Hv" with ``eps`` is Eq. 8.
     eps : float
-        Noise-variance ratio of Eq. 8 (output over input); 1 gives the TLS estimate.
+        Noise-variance ratio of Eq. 8, input noise over output noise (0: H1, inf: H2); 1
+        gives the TLS estimate.
     nperseg, noverlap, window
         Welch segmentation (see :func:`spectra`; ``nperseg=None`` is one full segment with
         a rectangular window).

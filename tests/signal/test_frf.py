@@ -112,3 +112,22 @@ def test_bad_inputs_are_clear_errors():
         frf(x, np.full(100, np.nan), FS)
     with pytest.raises(SignalError, match="unknown FRF estimator 'H3'"):
         frf(x, x, FS, estimator="H3")
+
+
+def test_hv_eps_is_input_over_output_noise_variance():
+    """x = 2 u, measured with input noise of std 0.5 and output noise of std 1.5. Hv(eps) is
+    the eps = 1 (TLS) estimate of p and sqrt(eps) x over sqrt(eps), consistent when the two
+    noises are equal, eps 1.5^2 = 0.5^2: eps = 1/9 (input over output) gives |H| = 2 within
+    1 % (2^18 samples, 255 segments: random error ~0.2 % per line, averaged over 511
+    lines); eps = 9 (output over input, as the docstring said) is biased by 54 %
+    (3.09), H1 by -20 % (1.60)."""
+    rng = np.random.default_rng(0)
+    n = 2**18
+    u = rng.standard_normal(n)
+    p = u + 0.5 * rng.standard_normal(n)
+    x = 2.0 * u + 1.5 * rng.standard_normal(n)
+    _, spp, sxx, spx = spectra(p, x, 1000.0, nperseg=1024)
+    mean = {eps: float(np.mean(np.abs(hv_from_spectra(spp, sxx, spx, eps)[1:-1])))
+            for eps in (1 / 9, 9.0)}
+    assert mean[1 / 9] == pytest.approx(2.0, rel=0.01)
+    assert mean[9.0] > 2.8
