@@ -69,7 +69,7 @@ def test_all_problems_reported_at_once_with_dotted_paths():
     assert "cannot convert '3 kg' to N/mm" in got["parameters.slide_stiffness.max"]
     assert "outside" in got["parameters.bearing_preload.nominal"]
     assert "unknown parameter" in got["parameters.no_such_parameter"]
-    assert "Extra inputs are not permitted" in got["excitation.colour"]
+    assert got["excitation.colour"].startswith("unknown key; known: kind, f0, f1, duration")
     assert "unknown design 'oatt'; available:" in got["stages[0].design"]
     assert "oat" in got["stages[0].design"]
     assert "unknown surrogate 'eq19'; available:" in got["stages[1].surrogates[0]"]
@@ -477,3 +477,20 @@ def test_validate_prints_the_plan_and_run_refuses_a_file_as_its_folder(tmp_path)
     res = CliRunner().invoke(app, ["run", str(ROOT / "studies" / "quick.toml"), "--out",
                                    str(afile)])
     assert res.exit_code == 2 and "a file of that name exists" in res.output
+
+
+@pytest.mark.parametrize("edit,where,message", [
+    (lambda d: d["excitation"].update(durration="0.25 s"), "excitation.durration",
+     "unknown key (did you mean 'duration'?); known: kind, f0, f1, duration,"),
+    (lambda d: d.update(excitaton={}), "excitaton", "did you mean 'excitation'?"),
+    (lambda d: d["stages"][0]["select"].update(treshold=0.1), "stages[0].select.treshold",
+     "did you mean 'threshold'?"),
+    (lambda d: d.update(parameters={"slide_stiffness": {"maxx": 1.0}}),
+     "parameters.slide_stiffness.maxx", "did you mean 'max'?); known: nominal, min, max"),
+])
+def test_a_misspelt_key_names_the_keys_its_table_knows(edit, where, message):
+    # pydantic's own "Extra inputs are not permitted" says nothing of what to write instead
+    data = copy.deepcopy(QUICK)
+    edit(data)
+    got = problems(data)
+    assert message in got[where]

@@ -7,9 +7,9 @@ from __future__ import annotations
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args, get_origin
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from ..errors import SensfwError, StudyError
 from ..excitation import Excitation, make_excitation
@@ -32,6 +32,51 @@ def _without(data: Any, locs: list[tuple]) -> Any:
             node = node[part]
         node.pop(loc[-1], None)
     return out
+
+
+def _section(loc: tuple) -> type[BaseModel] | None:
+    """The schema model of the table that holds the key at ``loc`` (None: a free-form table)."""
+    node: Any = StudyFile
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue
+        if isinstance(node, type) and issubclass(node, BaseModel):
+            field = node.model_fields.get(part)
+            if field is None:
+                return None
+            node = field.annotation
+        else:  # a table of named entries ([parameters.NAME], stages[i].bounds.NAME)
+            node = next((a for a in get_args(node)[1:]), None)
+        node = _model_in(node)
+        if node is None:
+            return None
+    return node
+
+
+def _model_in(annotation: Any) -> Any:
+    """The schema model (or dict of them) an annotation holds: ``X | None``, ``list[X]``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    if get_origin(annotation) is dict:
+        return annotation
+    for arg in get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _unknown_key(loc: tuple) -> str:
+    """What to say of an unknown key: the keys its table knows, the closest first."""
+    import difflib
+
+    section = _section(loc)
+    if section is None or not isinstance(section, type):
+        return "unknown key"
+    known = list(section.model_fields)
+    close = difflib.get_close_matches(str(loc[-1]), known, n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return f"unknown key{hint}; known: {', '.join(known)}"
 
 
 def _path(loc: tuple) -> str:
@@ -80,7 +125,9 @@ class Study:
             spec = StudyFile.model_validate(data)
         except ValidationError as err:
             # a validator's own message without pydantic's "Value error, " in front
-            problems = [(_path(e["loc"]), e["msg"].removeprefix("Value error, "))
+            problems = [(_path(e["loc"]), _unknown_key(e["loc"])
+                         if e["type"] == "extra_forbidden"
+                         else e["msg"].removeprefix("Value error, "))
                         for e in err.errors()]
             # unknown keys alone should not hide the other problems: drop them and check
             # the rest, so that everything is reported at once

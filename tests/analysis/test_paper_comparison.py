@@ -179,7 +179,7 @@ def with_compare(**changes):
      "'slide_exponent' is not a variable of stage 'doe'"),
     ({"responses__thd": "THDX"}, "responses.thd", "no scorer labelled 'THDX'"),
     ({"responses__sound": "P1"}, "responses.sound", "has no response 'sound'"),
-    ({"colour": "red"}, "colour", "Extra inputs are not permitted"),
+    ({"colour": "red"}, "colour", "unknown key; known: reference, stage, factors"),
 ])
 def test_compare_with_is_validated_with_the_study_file(changes, where, message):
     assert Study.load(ROOT / "studies" / "paper_table2.toml").spec.compare_with.stage == "doe"
