@@ -69,23 +69,44 @@ def fit_resonances(f: np.ndarray, H: np.ndarray, peaks: list[dict],
 
 
 def match_resonances(model: list[dict], measured: list[dict], tol: float = 0.25) -> list[dict]:
-    """Pair each measured resonance with the nearest model resonance within ``tol``
-    (relative); unmatched ones are listed with the other side empty (a missing or an extra
-    mode)."""
-    rows, used = [], set()
-    for m in measured:
-        best, dist = None, tol
-        for j, s in enumerate(model):
-            d = abs(np.log(s["frequency"] / m["frequency"]))
-            if j not in used and d < dist:
-                best, dist = j, d
-        if best is None:
+    """Pair measured and model resonances within ``tol`` (relative) in order of frequency:
+    the pairing that leaves the fewest unpaired and, among those, shifts them least (pairs
+    never cross: a measured resonance above another is not paired with a model resonance
+    below the other's partner); unmatched ones are listed with the other side empty (a
+    missing or an extra mode)."""
+    fm = np.array([m["frequency"] for m in measured], dtype=float)
+    fs = np.array([s["frequency"] for s in model], dtype=float)
+    om, os_ = np.argsort(fm, kind="stable"), np.argsort(fs, kind="stable")
+    n, k = len(om), len(os_)
+    # alignment of the two sorted lists: a pair costs its log distance, a resonance left
+    # unpaired tol / 2, so that any pair within tol beats leaving both unpaired
+    cost = np.zeros((n + 1, k + 1))
+    cost[:, 0] = np.arange(n + 1) * tol / 2
+    cost[0, :] = np.arange(k + 1) * tol / 2
+    for i in range(1, n + 1):
+        for j in range(1, k + 1):
+            d = abs(np.log(fs[os_[j - 1]] / fm[om[i - 1]]))
+            pair = cost[i - 1, j - 1] + d if d < tol else np.inf
+            cost[i, j] = min(pair, cost[i - 1, j] + tol / 2, cost[i, j - 1] + tol / 2)
+    partner: dict[int, int] = {}
+    i, j = n, k
+    while i > 0 and j > 0:
+        d = abs(np.log(fs[os_[j - 1]] / fm[om[i - 1]]))
+        if d < tol and np.isclose(cost[i, j], cost[i - 1, j - 1] + d):
+            partner[int(om[i - 1])] = int(os_[j - 1])
+            i, j = i - 1, j - 1
+        elif np.isclose(cost[i, j], cost[i - 1, j] + tol / 2):
+            i -= 1
+        else:
+            j -= 1
+    rows, used = [], set(partner.values())
+    for i, m in enumerate(measured):
+        if i not in partner:
             rows.append({"measured_hz": m["frequency"], "model_hz": None, "shift_pct": None,
                          "measured_damping": m["damping_ratio"], "model_damping": None,
                          "note": "no model resonance nearby (missing mode?)"})
         else:
-            used.add(best)
-            s = model[best]
+            s = model[partner[i]]
             rows.append({"measured_hz": m["frequency"], "model_hz": s["frequency"],
                          "shift_pct": 100 * (s["frequency"] / m["frequency"] - 1),
                          "measured_damping": m["damping_ratio"],
