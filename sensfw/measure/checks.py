@@ -177,15 +177,17 @@ def sweep_mismatch(est: SweepEstimate, excitation: Excitation,
     return None
 
 
-def describe(est: SweepEstimate) -> str:
+def describe(est: SweepEstimate, unit: str = "N") -> str:
+    """The estimated excitation in words; ``unit`` that of the force channel (N, or V)."""
     if est.is_sweep:
         return (f"{est.kind.replace('_', ' ')} {est.f0:.4g} -> {est.f1:.4g} Hz from "
-                f"{est.t_start:.4g} s to {est.t_end:.4g} s, level {est.amplitude:.4g}, "
-                f"drift +-{est.drift:.0%}, offset {est.offset:.3g}")
+                f"{est.t_start:.4g} s to {est.t_end:.4g} s, level {est.amplitude:.4g} {unit}, "
+                f"drift +-{est.drift:.0%}, offset {est.offset:.3g} {unit}")
     if est.kind == "random":
         return "random, broadband"
     return (f"{est.kind.replace('_', ' ')} from {est.t_start:.4g} s to {est.t_end:.4g} s, "
-            f"level {est.amplitude:.4g}" + (f" ({'; '.join(est.notes)})" if est.notes else ""))
+            f"level {est.amplitude:.4g} {unit}"
+            + (f" ({'; '.join(est.notes)})" if est.notes else ""))
 
 
 def resample(sig: Signals, fs: float) -> Signals:
@@ -358,11 +360,12 @@ def prepare(meas: Measurement, study) -> Measurement:
     if mismatch is None and est.drift > DRIFT_TOLERANCE:
         mismatch = f"its amplitude drifts by +-{est.drift:.0%}"
     voltage = meas.input_unit != "N"
+    said = describe(est, meas.input_unit)
     require_gain(meas, study)
     if study.drive == "measured" or voltage or (mismatch and study.drive == "auto"):
         if mismatch and study.drive == "auto":
             meas.notes.append(f"the excitation is not the study's ({mismatch}): estimated "
-                              f"{describe(est)}; the model is driven by the measured record")
+                              f"{said}; the model is driven by the measured record")
         elif (est.is_sweep and hasattr(ex, "f1")
               and (est.f1 < ex.f0 or est.f0 > ex.f1
                    or min(est.f1, ex.f1) - max(est.f0, ex.f0)
@@ -372,9 +375,9 @@ def prepare(meas: Measurement, study) -> Measurement:
                                  "is driven by the record, but the comparison sees little of "
                                  "the band (the export's sample rate?)")
             meas.notes.append(meas.warnings[-1])
-            meas.notes.append(f"the model is driven by the measured record ({describe(est)})")
+            meas.notes.append(f"the model is driven by the measured record ({said})")
         else:
-            meas.notes.append(f"the model is driven by the measured record ({describe(est)})")
+            meas.notes.append(f"the model is driven by the measured record ({said})")
         if sig.fs < ex.fs * (1 - 1e-6):  # the model's output sampled as slowly would alias
             meas.notes.append(f"resampled from {sig.fs:g} Hz to the study's {ex.fs:g} Hz, so "
                               "the model's response is sampled as the study's")
@@ -383,7 +386,7 @@ def prepare(meas: Measurement, study) -> Measurement:
         return meas
     if mismatch:  # drive = "ideal" asked for explicitly
         raise MeasurementError(meas.file, f"the excitation is not the study's ({mismatch}): "
-                               f"estimated {describe(est)}; set [excitation] drive = "
+                               f"estimated {said}; set [excitation] drive = "
                                "\"auto\" or \"measured\" to drive the model with the record",
                                "force")
     length = len(sig.force) / sig.fs - est.t_start
@@ -393,12 +396,12 @@ def prepare(meas: Measurement, study) -> Measurement:
                                "force")
     if contradicted:
         meas.warnings.append(f"the declared level {meas.level:g} {meas.input_unit} is not the "
-                             f"record's sweep amplitude, {est.amplitude:.4g}: the model is "
-                             f"driven at the declared level (leave the level out to use the "
-                             "record's)")
+                             f"record's sweep amplitude, {est.amplitude:.4g} "
+                             f"{meas.input_unit}: the model is driven at the declared level "
+                             "(leave the level out to use the record's)")
         meas.notes.append(meas.warnings[-1])
     meas.drive = ex.with_amplitude(float(f"{meas.level:.4g}"))
     meas.signals = align_to_ideal(meas, ex, est)
-    meas.notes.append(f"the record is the study's sweep ({describe(est)}); the model is "
+    meas.notes.append(f"the record is the study's sweep ({said}); the model is "
                       "driven by the ideal sweep at the measured level")
     return meas

@@ -76,6 +76,8 @@ def test_a_sweep_record_keeps_its_sections(tmp_path, runner):
     html = write_compare_report(study, cmp, tmp_path / "s.html").read_text()
     assert re.search(r"Order spectra</h2>\s*<figure>", html)
     assert "One level only" not in html
+    # how the model was driven: the estimated level and offset with the force's unit
+    assert re.search(r"level 0\.3\d* N, drift \+-\d+%, offset -?[\d.e-]+ N\)", html)
 
 
 def test_resonances_pair_in_order_of_frequency():
