@@ -169,8 +169,8 @@ def compare(
     for c in result.levels:
         thd = "" if c.thd_model is None else \
             f"; THD model {c.thd_model:.2f} % vs measured {c.thd_measured:.2f} %"
-        res = "".join(f"; resonance {r['measured_hz']:.2f} Hz measured, "
-                      f"{r['model_hz']:.2f} Hz model" for r in c.resonances
+        res = "".join(f"; resonance {r['measured_hz']:.4g} Hz measured, "
+                      f"{r['model_hz']:.4g} Hz model" for r in c.resonances
                       if r["measured_hz"] and r["model_hz"])
         parts = [] if c.error_noise_db is None else \
             [f"the measurement's noise alone: {c.error_noise_db:.2f} dB"]

@@ -126,8 +126,9 @@ def _summary(comparisons) -> pd.DataFrame:
             "noise alone (dB)": "" if c.error_noise_db is None else f"{c.error_noise_db:.2f}",
             "model's own scatter (dB)": "" if c.error_scatter_db is None
             else f"{c.error_scatter_db:.2f}",
-            "resonance measured (Hz)": f"{r['measured_hz']:.2f}" if r else "",
-            "model (Hz)": f"{r['model_hz']:.2f}" if r else "",
+            # as the record's own resonance table prints it (the lines are Hz apart)
+            "strongest resonance, measured (Hz)": f"{r['measured_hz']:.4g}" if r else "",
+            "model (Hz)": f"{r['model_hz']:.4g}" if r else "",
             "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
             + (f" (noise alone {c.thd_floor:.2f})" if c.thd_floor else "")
             if c.thd_measured is not None and c.thd_model is not None else ""})

@@ -76,6 +76,12 @@ def test_a_sweep_record_keeps_its_sections(tmp_path, runner):
     html = write_compare_report(study, cmp, tmp_path / "s.html").read_text()
     assert re.search(r"Order spectra</h2>\s*<figure>", html)
     assert "One level only" not in html
+    # the summary names which resonance it shows, printed as the record's own table does
+    # (the FRF's lines are Hz apart: 1592.59 Hz said two digits too many)
+    r = next(r for r in cmp.levels[0].resonances if r["measured_hz"] and r["model_hz"])
+    assert "strongest resonance, measured (Hz)" in html
+    assert not re.search(r"<td>\d+\.\d\d</td><td>\d+\.\d\d</td><td>[\d.]+ / ", html)
+    assert html.count(f"<td>{r['measured_hz']:.4g}</td>") >= 1
     # how the model was driven: the estimated level and offset with the force's unit
     assert re.search(r"level 0\.3\d* N, drift \+-\d+%, offset -?[\d.e-]+ N\)", html)
 
