@@ -494,3 +494,13 @@ def test_a_misspelt_key_names_the_keys_its_table_knows(edit, where, message):
     edit(data)
     got = problems(data)
     assert message in got[where]
+
+
+def test_an_unknown_backend_is_refused_naming_the_option_before_anything_runs(cli, tmp_path):
+    """It was refused only once the runner started, below a progress bar already drawn."""
+    out = tmp_path / "o"
+    proc = cli("compare", "studies/quick.toml", "-m", "nowhere.csv", "--backend", "thread",
+               "--out", out)
+    assert proc.returncode == 2
+    assert "--backend" in proc.stderr and "use one of serial, processes, dask" in proc.stderr
+    assert "Traceback" not in proc.stderr and not out.exists()

@@ -36,7 +36,19 @@ StudyFile = Annotated[Path, typer.Argument(help="study TOML file")]
 OutDir = Annotated[Path, typer.Option("--out", "-o")]
 Workers = Annotated[int | None, typer.Option(min=1, help="worker processes (default: "
                                                           "cores)")]
-Backend = Annotated[str | None, typer.Option(help="serial | processes | dask")]
+
+
+def _backend(value: str | None) -> str | None:
+    """``--backend`` checked before anything is loaded or run."""
+    from ..runs.executor import BACKENDS
+
+    if value is not None and value not in BACKENDS:
+        raise typer.BadParameter(f"{value!r}: use one of {', '.join(BACKENDS)}")
+    return value
+
+
+Backend = Annotated[str | None, typer.Option(help="serial | processes | dask",
+                                             callback=_backend)]
 Scheduler = Annotated[str | None, typer.Option(help="Dask scheduler tcp://host:port")]
 ShowProgress = Annotated[bool, typer.Option(help="show the progress bar")]
 
