@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.patches import Patch
 
 
 def frf_overlay(comparisons, extra=None, title="FRF: model against measurement",
@@ -63,6 +64,7 @@ def band_errors(comparisons):
     centres = [b["centre_hz"] for b in ref.bands] if ref else []
     colors = plt.cm.tab10(np.arange(10))
     bars = False
+    handles = []  # the legend: each record's colour (its first bar may be a grey one)
     for i, c in enumerate(comparisons):
         pos = {b["centre_hz"]: j for j, b in enumerate(ref.bands)}
         used = {b["centre_hz"] for b in c.used_bands}
@@ -73,6 +75,8 @@ def band_errors(comparisons):
                yerr=err if any(err) else None, error_kw={"lw": 0.8, "capsize": 1.5},
                color=[colors[i % 10] if b["centre_hz"] in used else "0.8" for b in c.bands],
                label=getattr(c, "level_text", f"{c.level:.3g} {c.unit}"))
+        handles.append(Patch(color=colors[i % 10],
+                             label=getattr(c, "level_text", f"{c.level:.3g} {c.unit}")))
     if ref:
         step = max(1, len(centres) // 30)
         ax.set_xticks(np.arange(len(centres))[::step],
@@ -85,7 +89,7 @@ def band_errors(comparisons):
                  + ("error bars: the measurement's standard error; " if bars else
                     "no error bars: these records carry no standard error (FRFs alone); ")
                  + "grey: bands the measurement cannot speak for)", fontsize=9)
-    ax.legend(fontsize=7)
+    ax.legend(handles=[*handles, Patch(color="0.8", label="cannot speak for")], fontsize=7)
     ax.grid(True, axis="y", alpha=0.3)
     return fig
 

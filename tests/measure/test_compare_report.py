@@ -103,3 +103,23 @@ def test_resonances_pair_in_order_of_frequency():
     assert [(r["measured_hz"], r["model_hz"]) for r in
             match_resonances(peaks(105.0), peaks(100.0, 110.0))] == [(100.0, None),
                                                                      (110.0, 105.0)]
+
+
+def test_the_band_error_legend_shows_each_record_s_colour():
+    """Its entries took the colour of each record's first bar, grey where the measurement
+    cannot speak for the lowest band (the quick study's records): three grey entries."""
+    from types import SimpleNamespace
+
+    from matplotlib.colors import to_hex
+
+    from sensfw.report.measure_figures import band_errors
+
+    bands = [{"centre_hz": c, "mean_db": 1.0, "noise_db": 0.5} for c in (63.1, 100.0, 1000.0)]
+    records = [SimpleNamespace(bands=bands, used_bands=bands[1:], level=x, unit="N",
+                               level_text=f"sweep {x} N")
+               for x in (0.05, 0.1)]
+    legend = band_errors(records).axes[0].get_legend()
+    got = {t.get_text(): to_hex(h.get_facecolor())
+           for t, h in zip(legend.get_texts(), legend.legend_handles, strict=True)}
+    assert got == {"sweep 0.05 N": "#1f77b4", "sweep 0.1 N": "#ff7f0e",
+                   "cannot speak for": "#cccccc"}
