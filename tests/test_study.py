@@ -504,3 +504,14 @@ def test_an_unknown_backend_is_refused_naming_the_option_before_anything_runs(cl
     assert proc.returncode == 2
     assert "--backend" in proc.stderr and "use one of serial, processes, dask" in proc.stderr
     assert "Traceback" not in proc.stderr and not out.exists()
+
+
+@pytest.mark.parametrize("command", ["compare", "calibrate", "diagnose", "augment"])
+def test_the_measured_option_names_every_kind_of_record_it_reads(command):
+    """-m reads LMS .mat exports and folders too (README, "Model against measurement"); its
+    help said ".csv or .uff"."""
+    proc = subprocess.run([sys.executable, "-m", "sensfw", command, "--help"],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "COLUMNS": "400"})
+    assert proc.returncode == 0
+    assert ".csv, .uff, an LMS .mat export or a folder of them" in proc.stdout

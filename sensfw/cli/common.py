@@ -177,6 +177,8 @@ def _json(path: Path, data) -> None:
 
 
 Measured = Annotated[list[Path], typer.Option("--measured", "-m",
-                                              help="measurement file(s) (.csv or .uff)")]
+                                              help="a measurement: .csv, .uff, an LMS .mat "
+                                                   "export or a folder of them, a folder of "
+                                                   "level folders; -m again for more")]
 
 
