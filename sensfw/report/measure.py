@@ -22,9 +22,11 @@ from .measure_figures import (
 )
 
 
-def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
+def amplitude_frames(amplitude: dict, output_unit: str | None = None
+                     ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The amplitude-dependence table as two frames: resonances per level, harmonics and
-    DC per level."""
+    DC per level (in ``output_unit``, the compared channel's, where given)."""
+    dc = f" ({output_unit})" if output_unit else ""
     res = []
     for r in amplitude["table"]["resonances"]:
         for x in r["levels"]:
@@ -44,8 +46,8 @@ def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
             row[f"H{k}/H1 model"] = h[f"h{k}_model"]
             row[f"H{k}/H1 floor"] = h[f"h{k}_floor"]
         row.update({"THD measured %": h["thd_measured"], "THD model %": h["thd_model"],
-                    "DC measured": h["dc_measured"], "DC model": h["dc_model"],
-                    "DC std. error": h["dc_standard_error"]})
+                    f"DC measured{dc}": h["dc_measured"], f"DC model{dc}": h["dc_model"],
+                    f"DC std. error{dc}": h["dc_standard_error"]})
         harm.append(row)
     def blank(frame):  # empty cells rather than NaN
         return frame.astype(object).where(frame.notna(), "")
@@ -61,7 +63,8 @@ def amplitude_frames(amplitude: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     return blank(frame), blank(pd.DataFrame(harm))
 
 
-def amplitude_section(page, amplitude: dict, unit: str = "N") -> None:
+def amplitude_section(page, amplitude: dict, unit: str = "N",
+                      output_unit: str | None = None) -> None:
     """Sentences, plot and tables of :func:`sensfw.measure.signatures.amplitude_dependence`
     (one line where there is a single level, or nothing to plot)."""
     page.h2("Amplitude dependence")
@@ -86,7 +89,7 @@ def amplitude_section(page, amplitude: dict, unit: str = "N") -> None:
                     "The classes judge the measured trend relative to the model's own.")
     else:
         page.p("No resonance prominent at two levels or more, and no harmonics: no plot.")
-    res, harm = amplitude_frames(amplitude)
+    res, harm = amplitude_frames(amplitude, output_unit)
     if not res.empty:
         page.table(res, index=False)
     if has_harm:
@@ -102,9 +105,10 @@ def _resonance_frame(rows) -> pd.DataFrame:
     return frame.astype(object).where(frame.notna(), "")
 
 
-def _harmonic_frame(rows) -> pd.DataFrame:
-    """A record's harmonic table, headed plainly."""
-    names = {"order": "order", "model": "model P_k", "measured": "measured P_k",
+def _harmonic_frame(rows, output_unit: str | None = None) -> pd.DataFrame:
+    """A record's harmonic table, headed plainly; the amplitudes in ``output_unit``."""
+    unit = f" ({output_unit})" if output_unit else ""
+    names = {"order": "order", "model": f"model P_k{unit}", "measured": f"measured P_k{unit}",
              "model_ratio": "model P_k/P_1", "measured_ratio": "measured P_k/P_1",
              "measured_floor_ratio": "measured noise floor", "difference_db":
              "model - measured (dB)"}
@@ -248,7 +252,8 @@ def write_compare_report(study, result, path) -> Path:
             page.p("No level was measured both up and down: no jump can be seen.")
     if result.amplitude:
         unit = comparisons[0].unit if comparisons else "N"
-        amplitude_section(page, result.amplitude, unit)
+        amplitude_section(page, result.amplitude, unit,
+                          comparisons[0].output_unit if comparisons else None)
     if result.bands:
         prediction_section(page, comparisons, result.bands, band)
     page.h2("Per record")
@@ -269,7 +274,7 @@ def write_compare_report(study, result, path) -> Path:
         else:
             page.p("No resonance in the band.")
         if c.harmonics:
-            page.table(_harmonic_frame(c.harmonics), index=False)
+            page.table(_harmonic_frame(c.harmonics, c.output_unit), index=False)
         elif c.kind == "random":
             page.p("Harmonics: none for a random record (no sweep to follow).")
         elif c.stepped and "measured" not in c.settled_db:

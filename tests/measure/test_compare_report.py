@@ -82,6 +82,10 @@ def test_a_sweep_record_keeps_its_sections(tmp_path, runner):
     assert "strongest resonance, measured (Hz)" in html
     assert not re.search(r"<td>\d+\.\d\d</td><td>\d+\.\d\d</td><td>[\d.]+ / ", html)
     assert html.count(f"<td>{r['measured_hz']:.4g}</td>") >= 1
+    # amplitudes and DC offsets carry the compared channel's unit
+    unit = cmp.levels[0].output_unit
+    assert unit and f"<th>model P_k ({unit})</th>" in html
+    assert f"<th>DC measured ({unit})</th>" in html
     # how the model was driven: the estimated level and offset with the force's unit
     assert re.search(r"level 0\.3\d* N, drift \+-\d+%, offset -?[\d.e-]+ N\)", html)
 
