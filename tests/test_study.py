@@ -515,3 +515,15 @@ def test_the_measured_option_names_every_kind_of_record_it_reads(command):
                           env={**os.environ, "COLUMNS": "400"})
     assert proc.returncode == 0
     assert ".csv, .uff, an LMS .mat export or a folder of them" in proc.stdout
+
+
+@pytest.mark.parametrize("command,text", [
+    ("simulate", "NAME[@PLACE][:KEY=VALUE,...] hidden physical effect"),
+    ("augment", "effect to add, NAME[@PLACE]"),
+])
+def test_help_keeps_the_place_of_an_effect(command, text):
+    """rich took "[@PLACE]" for markup and dropped it: the help read NAME[:KEY=VALUE,...]."""
+    proc = subprocess.run([sys.executable, "-m", "sensfw", command, "--help"],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "COLUMNS": "400"})
+    assert text in proc.stdout

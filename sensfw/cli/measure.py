@@ -34,7 +34,7 @@ def simulate(
     set_: Annotated[list[str] | None, typer.Option("--set", help="NAME=VALUE (paper units)")]
     = None,
     effect: Annotated[list[str] | None, typer.Option(
-        help="NAME[@PLACE][:KEY=VALUE,...] hidden physical effect; KEY a parameter of "
+        help=r"NAME\[@PLACE][:KEY=VALUE,...] hidden physical effect; KEY a parameter of "
              "the effect or one of its options (micro_slip:elements=6)")] = None,
     noise: Annotated[float, typer.Option(help="noise std as a fraction of each RMS")] = 0.0,
     seed: Annotated[int, typer.Option(help="noise seed")] = 0,
@@ -276,7 +276,7 @@ def effect_options(items: list[str]) -> dict[str, object]:
 def augment(
     study_file: StudyFile,
     measured: Measured,
-    effect: Annotated[str, typer.Option(help="effect to add, NAME[@PLACE]")],
+    effect: Annotated[str, typer.Option(help=r"effect to add, NAME\[@PLACE]")],
     option: Annotated[list[str] | None, typer.Option(
         "--option", help="an option of the effect, KEY=VALUE (repeatable), e.g. "
                          "elements=6 for micro_slip")] = None,
