@@ -90,8 +90,12 @@ class ParameterSet(Mapping[str, Parameter]):
         try:
             return self._p[name]
         except KeyError:
+            import difflib
+
+            close = difflib.get_close_matches(str(name), list(self._p), n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ParameterError(
-                f"unknown parameter {name!r}; known: {', '.join(self._p)}"
+                f"unknown parameter {name!r}{hint}; known: {', '.join(self._p)}"
             ) from None
 
     def __contains__(self, name: object) -> bool:

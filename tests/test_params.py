@@ -48,3 +48,21 @@ def test_a_dimensionless_bound_message_has_no_trailing_blank():
     with pytest.raises(ParameterError, match=r"= 2e\+06 N/mm is outside its bounds "
                                              r"\[1e\+06, 1\.5e\+06\] N/mm$"):
         Parameter("k", "N/mm", 1.2e6, 1e6, 1.5e6).check(2e6)
+
+
+def test_a_misspelt_parameter_is_answered_with_the_closest_name(tmp_path):
+    """`sensfw simulate --set slide_stifness=...` or an effect's `flex_frequncy=...`: the
+    list of every parameter alone left the user to find the typo in 21 names."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, "-m", "sensfw", "simulate",
+                           str(root / "studies" / "quick.toml"), "--out",
+                           str(tmp_path / "m.csv"), "--set", "slide_stifness=1e6",
+                           "--effect", "flexible_mode@driveshaft:flex_frequncy=1800"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert "unknown parameter 'slide_stifness' (did you mean 'slide_stiffness'?)" in proc.stderr
+    assert "Traceback" not in proc.stderr
