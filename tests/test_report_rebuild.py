@@ -113,3 +113,19 @@ def test_a_scorer_changed_in_the_study_file_is_scored_again(folder, no_simulatio
     got = scorer.score(sensfw.runs.RunStore(folder / "runs").load(run["key"]).signals, ref)
     assert new[0]["scores"]["frf_scalar"][run["label"]] == pytest.approx(
         next(iter(got.values())), rel=1e-12)
+
+
+def test_a_spectrogram_is_titled_with_the_values_its_run_ran_at():
+    """Fig. 11's two panels were titled 'run ff:1' and 'run ff:9' alone: which corner of the
+    design each is was nowhere on the page."""
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from sensfw.report.study import _run_title
+
+    var = lambda name, unit: SimpleNamespace(name=name, unit=unit)  # noqa: E731
+    stage = SimpleNamespace(
+        space=SimpleNamespace(variables=(var("slide_stiffness", "N/mm"), var("ratio", ""))),
+        table=pd.DataFrame({"slide_stiffness": [70500.0], "ratio": [0.5]}, index=["ff:1"]))
+    assert _run_title(stage, "ff:1") == "run ff:1\nslide_stiffness = 7.05e+04 N/mm\nratio = 0.5"

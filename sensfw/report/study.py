@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import LogFormatter, StrMethodFormatter
 
+from ..params import spaced
 from .html import Page
 
 
@@ -167,6 +168,16 @@ def residual_plots(stage, label: str, name: str):
     return fig
 
 
+def _run_title(stage, label) -> str:
+    """A run's label with the design-variable values it ran at, one a line (up to three)."""
+    units = {v.name: v.unit for v in stage.space.variables}
+    row = stage.table.loc[label]
+    if len(row) > 3:
+        return f"run {label}"
+    return "\n".join([f"run {label}", *(f"{k} = {float(x):.3g}{spaced(units.get(k, ''))}"
+                                        for k, x in row.items())])
+
+
 def spectrograms(result, stage, channel):
     """Fig. 11: spectrograms of the first and last run of the stage."""
     from ..signal import spectrogram
@@ -181,7 +192,7 @@ def spectrograms(result, stage, channel):
         f, t, S = spectrogram(sig.channel(channel), sig.fs)
         vmax = np.nanmax(S)
         im = ax.pcolormesh(t, f, S, shading="auto", vmin=vmax - 80, vmax=vmax, cmap="viridis")
-        ax.set_title(f"run {label}")
+        ax.set_title(_run_title(stage, label), fontsize=8)
         ax.set_xlabel("time (s)")
     axes[0].set_ylabel("frequency (Hz)")
     fig.colorbar(im, ax=axes, label="dB")
