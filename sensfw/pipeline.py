@@ -292,6 +292,10 @@ def load_result(out_dir: str | Path) -> StudyResult:
 
     out = Path(out_dir)
     path = out / "results.json"
+    if not path.is_file():
+        raise SensfwError(f"{out}: no results.json, not the output folder of a finished "
+                          f"`sensfw run`: check the folder's name, or run the study with "
+                          f"--out {out} first")
     try:
         data = json.loads(path.read_text())
         stages = data["stages"]

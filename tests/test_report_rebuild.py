@@ -129,3 +129,17 @@ def test_a_spectrogram_is_titled_with_the_values_its_run_ran_at():
         space=SimpleNamespace(variables=(var("slide_stiffness", "N/mm"), var("ratio", ""))),
         table=pd.DataFrame({"slide_stiffness": [70500.0], "ratio": [0.5]}, index=["ff:1"]))
     assert _run_title(stage, "ff:1") == "run ff:1\nslide_stiffness = 7.05e+04 N/mm\nratio = 0.5"
+
+
+def test_a_folder_without_results_is_named_with_what_to_do(tmp_path):
+    """`sensfw report` on a mistyped folder printed Python's '[Errno 2] No such file or
+    directory' inside its message."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "sensfw", "report", str(tmp_path / "oot")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert "oot: no results.json, not the output folder of a finished `sensfw run`" \
+        in proc.stderr.replace("\n", " ")
+    assert "Errno" not in proc.stderr and "Traceback" not in proc.stderr
