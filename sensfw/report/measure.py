@@ -137,8 +137,8 @@ def _summary(comparisons) -> pd.DataFrame:
             + (f" (noise alone {c.thd_floor:.2f})" if c.thd_floor else "")
             if c.thd_measured is not None and c.thd_model is not None else ""})
     frame = pd.DataFrame(rows)
-    for col in ("noise alone (dB)", "model's own scatter (dB)"):
-        if not (frame[col] != "").any():
+    for col in ("noise alone (dB)", "model's own scatter (dB)", "THD measured / model (%)"):
+        if not (frame[col] != "").any():  # no record has one (random records: no THD)
             frame = frame.drop(columns=col)
     return frame
 

@@ -54,6 +54,7 @@ def test_a_random_record_reads_at_a_glance(tmp_path, runner):
     assert re.search(rf"<td>{re.escape(error)}</td>", html)  # the summary
     assert f"FRF error {error} dB</h3>" in html  # the record's heading: the same figure
     assert "Harmonics: none for a random record" in html
+    assert "THD measured / model" not in html  # a summary column empty for every record
     assert re.search(r"Order spectra</h2>\s*<p>None: no record holds the time data of a "
                      r"sweep", html)
     assert "Up and down sweeps" not in html  # no stepped record: no such section
@@ -80,6 +81,7 @@ def test_a_sweep_record_keeps_its_sections(tmp_path, runner):
     # (the FRF's lines are Hz apart: 1592.59 Hz said two digits too many)
     r = next(r for r in cmp.levels[0].resonances if r["measured_hz"] and r["model_hz"])
     assert "strongest resonance, measured (Hz)" in html
+    assert "<th>THD measured / model (%)</th>" in html
     assert not re.search(r"<td>\d+\.\d\d</td><td>\d+\.\d\d</td><td>[\d.]+ / ", html)
     assert html.count(f"<td>{r['measured_hz']:.4g}</td>") >= 1
     # amplitudes and DC offsets carry the compared channel's unit
