@@ -194,6 +194,9 @@ def diagnosed_start(path, name: str, attach: str | None = None
     import json
 
     path = Path(path)
+    if not path.is_file():
+        raise SensfwError(f"--start-from {path}: no such file; give the diagnose.json a "
+                          "`sensfw diagnose ... --out DIR` wrote (DIR/diagnose.json)")
     try:
         data = json.loads(path.read_text())
         ranking = data.get("ranking", [])

@@ -129,3 +129,15 @@ def test_the_band_error_legend_shows_each_record_s_colour():
            for t, h in zip(legend.get_texts(), legend.legend_handles, strict=True)}
     assert got == {"sweep 0.05 N": "#1f77b4", "sweep 0.1 N": "#ff7f0e",
                    "cannot speak for": "#cccccc"}
+
+
+def test_a_missing_start_from_file_is_named_with_what_to_give(tmp_path):
+    """`augment --start-from` a mistyped path printed Python's '[Errno 2] No such file or
+    directory' inside its message."""
+    from sensfw.errors import SensfwError
+    from sensfw.measure.augment import diagnosed_start
+
+    with pytest.raises(SensfwError) as info:
+        diagnosed_start(tmp_path / "diagnse.json", "flexible_mode")
+    assert "--start-from" in str(info.value) and "no such file" in str(info.value)
+    assert "(DIR/diagnose.json)" in str(info.value) and "Errno" not in str(info.value)
