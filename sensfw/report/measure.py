@@ -56,9 +56,10 @@ def amplitude_frames(amplitude: dict, output_unit: str | None = None
     twins = "model's own scatter %"
     if twins in frame and frame[twins].isna().all():  # no twin runs
         frame = frame.drop(columns=twins)
-    elif twins in frame:  # infinite: a twin has no peak there
+    elif twins in frame:  # infinite: a twin has no peak there; round-off (1e-13 %) is 0.00
         frame[twins] = frame[twins].map(
-            lambda v: "a twin has none" if v is not None and np.isinf(v) else v)
+            lambda v: v if v is None or np.isnan(v) else
+            "a twin has none" if np.isinf(v) else f"{v:.2f}")
 
     return blank(frame), blank(pd.DataFrame(harm))
 

@@ -141,3 +141,20 @@ def test_a_missing_start_from_file_is_named_with_what_to_give(tmp_path):
         diagnosed_start(tmp_path / "diagnse.json", "flexible_mode")
     assert "--start-from" in str(info.value) and "no such file" in str(info.value)
     assert "(DIR/diagnose.json)" in str(info.value) and "Errno" not in str(info.value)
+
+
+def test_the_model_s_own_scatter_is_printed_to_the_hundredth_of_a_percent():
+    """Twin runs that differ by round-off gave cells of 1.538e-13 and 4.787e-10 (%) beside
+    0 in the amplitude table; the criterion is 0.5 %."""
+    from sensfw.report.measure import amplitude_frames
+
+    def level(x, scatter):
+        return {"level": x, "measured_hz": 1594.0, "model_hz": 1506.0, "shift_pct": 5.7,
+                "measured_damping": 0.005, "model_damping": 0.0045, "damping_ratio": 1.2,
+                "method": "mode fit", "model_scatter_pct": scatter}
+
+    amplitude = {"table": {"harmonics": [], "resonances": [
+        {"id": "R3", "kind": "paired",
+         "levels": [level(0.05, 4.787e-10), level(0.1, 1.234), level(0.2, float("inf"))]}]}}
+    res, _ = amplitude_frames(amplitude)
+    assert list(res["model's own scatter %"]) == ["0.00", "1.23", "a twin has none"]
