@@ -14,6 +14,7 @@ from sklearn.base import clone
 from sklearn.model_selection import KFold
 
 from ..errors import AnalysisError, SensfwError
+from ..surrogates.base import total_ss
 
 
 def _arrays(X, y):
@@ -34,7 +35,7 @@ def q2_cv(estimator, X, y, splitter) -> float:
         else:
             est.fit(Xa[train], ya[train])
             pred[test] = est.predict(Xa[test])
-    ss = float(np.sum((ya - ya.mean()) ** 2))
+    ss = total_ss(ya)
     return float(1 - np.sum((ya - pred) ** 2) / ss) if ss > 0 else float("nan")
 
 
@@ -63,7 +64,7 @@ def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
         raise AnalysisError(f"validation needs at least 3 runs, got {n}")
     fitted = np.asarray(estimator.predict(X), float)
     resid = ya - fitted
-    ss = float(np.sum((ya - ya.mean()) ** 2))
+    ss = total_ss(ya)
     summary = estimator.summary_ or {}
     r2 = float(1 - np.sum(resid**2) / ss) if ss > 0 else float("nan")
     # statistics on the scale of y (a surrogate may fit a transformed response)
@@ -131,7 +132,7 @@ def confirmation(estimator, X_new, y_new, alpha: float = 0.05) -> dict:
         raise AnalysisError("no confirmation runs finished")
     pred = np.asarray(estimator.predict(X_new), float)
     err = ya - pred
-    ss = float(np.sum((ya - ya.mean()) ** 2))
+    ss = total_ss(ya)
     out = {"n": len(ya), "rmse": float(np.sqrt(np.mean(err**2))),
            "max_abs_error": float(np.max(np.abs(err))),
            "r2": float(1 - np.sum(err**2) / ss) if ss > 0 else float("nan"),

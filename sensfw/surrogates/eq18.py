@@ -30,7 +30,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..options import Bool, Pairs, PluginOptions, Str
 from ..plugins import surrogates
-from .base import BOUNDS, SurrogateBase, SurrogateError, feature_names, scaling
+from .base import BOUNDS, SurrogateBase, SurrogateError, feature_names, scaling, total_ss
 
 
 def aliased_terms(A: np.ndarray, terms: list[str], rtol: float = 1e-8) -> list[str]:
@@ -244,13 +244,16 @@ class Eq18(SurrogateBase):
             self.coefficients_physical_ = self.coefficients_
         h = res.get_influence().hat_matrix_diag
         e = res.resid
-        ss_tot = float(np.sum((y - y.mean()) ** 2))
+        ss_tot = total_ss(y)
         # a run of leverage 1 (a lone centre point of a saturated design) is fitted exactly
         # whatever its value: its left-out prediction, and so PRESS, is undefined
         press = float(np.sum((e / (1 - h)) ** 2)) if np.all(h < 1 - 1e-9) else np.nan
+        nan = float("nan")  # a constant response: statsmodels divides round-off by 0
         self.summary_ = {
-            "r2": float(res.rsquared), "r2_adj": float(res.rsquared_adj),
-            "f_stat": float(res.fvalue), "f_pvalue": float(res.f_pvalue),
+            "r2": float(res.rsquared) if ss_tot > 0 else nan,
+            "r2_adj": float(res.rsquared_adj) if ss_tot > 0 else nan,
+            "f_stat": float(res.fvalue) if ss_tot > 0 else nan,
+            "f_pvalue": float(res.f_pvalue) if ss_tot > 0 else nan,
             "n_obs": int(res.nobs), "n_terms": int(A.shape[1]), "df_resid": float(res.df_resid),
             "q2": float(1 - press / ss_tot) if ss_tot > 0 else float("nan"),
             "rmse": float(np.sqrt(np.mean(e**2))),

@@ -121,3 +121,27 @@ def test_physical_units_are_fitted_on_equilibrated_columns():
     c, *_ = np.linalg.lstsq(A / s, Y.to_numpy(), rcond=None)
     np.testing.assert_allclose(r.coefficients_["estimate"].to_numpy(), c / s, rtol=1e-9)
     np.testing.assert_allclose(r.predict(X), A @ (c / s), rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("level", [2.0, 0.1, 1234.5])
+def test_a_constant_response_has_undefined_fit_statistics(level):
+    """SS_tot = 0 in exact arithmetic: R², R²adj, F and Q² are 0/0. np.full(27, 0.1) has a
+    mean off in its last bit; statsmodels then reported R² -2.15, F -1.29 and Q² -9.46
+    (and R² -inf, F -1.89 for 2.0)."""
+    from sensfw.analysis.validation import validate
+
+    y = np.full(len(X), level)
+    est = make_surrogate("eq18").fit(X, y)
+    for key in ("r2", "r2_adj", "f_stat", "f_pvalue", "q2"):
+        assert np.isnan(est.summary_[key]), key
+    out = validate(est, X, y)
+    assert np.isnan(out["r2"]) and np.isnan(out["f_stat"]) and out["q2_loo"] is None
+    assert "does not vary" in out["notes"]["r2"]
+    # a small real spread on a large offset is still a response: R² as statsmodels gives it
+    # on the centred response (round-off 1e-16 x 1e3 against a spread of 1e-6: 1e-7 rel.)
+    y = 1e3 + 1e-6 * Y.to_numpy()
+    import statsmodels.api as sm
+
+    ref = sm.OLS(Y.to_numpy(), design_matrix(Z.to_numpy(), list(X.columns))[0]).fit()
+    est = make_surrogate("eq18").fit(X, y)
+    assert est.summary_["r2_adj"] == pytest.approx(ref.rsquared_adj, rel=1e-6)
