@@ -123,9 +123,14 @@ def check_data(est, X, y: Any = "no_validation", *, reset: bool):
     try:
         if isinstance(y, str) and y == "no_validation":
             return validate_data(est, X, reset=reset, dtype=np.float64)
-        return validate_data(est, X, y, reset=reset, dtype=np.float64, y_numeric=True)
+        X, y = validate_data(est, X, y, reset=reset, dtype=np.float64, y_numeric=True)
     except ValueError as err:
         raise SurrogateError(f"{type(est).__name__}: {err}") from None
+    try:  # y_numeric converts only object arrays: strings got through to the fit
+        return X, np.asarray(y, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise SurrogateError(f"{type(est).__name__}: y must be numeric, got dtype "
+                             f"{y.dtype} ({err})") from None
 
 
 #: a response whose spread is at most this fraction of its largest magnitude is constant up

@@ -135,3 +135,12 @@ def test_gaussian_process_loo_is_the_refit_with_its_kernel_held(n):
             Z[k], (y[k] - m) / g.y_scale_)
         ref[i] = m + g.y_scale_ * gp.predict(Z[i:i + 1])[0]
     np.testing.assert_allclose(g.loo_predict(), ref, rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", surrogates.names())
+def test_a_response_of_strings_is_a_surrogate_error(name):
+    """scikit-learn's ``y_numeric`` converts only object arrays: a string array reached the
+    fit (Eq18: ValueError 'data type must provide an itemsize'; the GP: TypeError)."""
+    y = np.array(["slow", "fast"] * (len(X) // 2))
+    with pytest.raises(SurrogateError, match="y must be numeric"):
+        make_surrogate(name, **LIGHT.get(name, {})).fit(X, y)
