@@ -116,6 +116,20 @@ class SurrogateBase(RegressorMixin, BaseEstimator):
         return None
 
 
+def check_alpha(est, alpha) -> float:
+    """``alpha`` of a (1 - alpha) interval, a number in (0, 1); else a
+    :class:`SurrogateError` (alpha 1.5 gave a lower bound above the upper one, alpha 0
+    an infinite interval)."""
+    try:
+        a = float(alpha)
+    except (TypeError, ValueError):
+        a = float("nan")
+    if not 0 < a < 1:
+        raise SurrogateError(f"{type(est).__name__}: alpha must be in (0, 1) (a (1 - alpha) "
+                             f"prediction interval), got {alpha!r}")
+    return a
+
+
 def check_data(est, X, y: Any = "no_validation", *, reset: bool):
     """scikit-learn's ``validate_data`` (finite 2-D float X, 1-D numeric y, the number and
     names of features checked against the fit); its ValueError becomes a

@@ -30,7 +30,15 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..options import Bool, Pairs, PluginOptions, Str
 from ..plugins import surrogates
-from .base import BOUNDS, SurrogateBase, SurrogateError, feature_names, scaling, total_ss
+from .base import (
+    BOUNDS,
+    SurrogateBase,
+    SurrogateError,
+    check_alpha,
+    feature_names,
+    scaling,
+    total_ss,
+)
 
 
 def aliased_terms(A: np.ndarray, terms: list[str], rtol: float = 1e-8) -> list[str]:
@@ -286,6 +294,7 @@ class Eq18(SurrogateBase):
 
     def predict_interval(self, X, alpha: float = 0.05):
         """(lower, upper) (1 - alpha) prediction intervals for new observations."""
+        alpha = check_alpha(self, alpha)
         A = self._matrix(X)
         frame = self.result_.get_prediction(A).summary_frame(alpha=alpha)
         return (self._back(frame["obs_ci_lower"].to_numpy()),

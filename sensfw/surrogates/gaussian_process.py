@@ -11,7 +11,16 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..options import Bool, Int, Pairs, PluginOptions, Str
 from ..plugins import surrogates
-from .base import BOUNDS, SEED, RandomState, SurrogateBase, SurrogateError, feature_names, scaling
+from .base import (
+    BOUNDS,
+    SEED,
+    RandomState,
+    SurrogateBase,
+    SurrogateError,
+    check_alpha,
+    feature_names,
+    scaling,
+)
 
 
 def _kernel(value):
@@ -146,6 +155,7 @@ class GaussianProcess(SurrogateBase):
 
     def predict_interval(self, X, alpha: float = 0.05):
         """Gaussian (1 - alpha) predictive intervals."""
+        alpha = check_alpha(self, alpha)
         mean, std = self.predict(X, return_std=True)
         z = stats.norm.ppf(1 - alpha / 2)
         return mean - z * std, mean + z * std

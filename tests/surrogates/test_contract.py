@@ -144,3 +144,29 @@ def test_a_response_of_strings_is_a_surrogate_error(name):
     y = np.array(["slow", "fast"] * (len(X) // 2))
     with pytest.raises(SurrogateError, match="y must be numeric"):
         make_surrogate(name, **LIGHT.get(name, {})).fit(X, y)
+
+
+@pytest.mark.parametrize("name", ["eq18", "gaussian_process"])
+@pytest.mark.parametrize("alpha", [0, 1, 1.5, -0.1, float("nan"), "5%"])
+def test_an_interval_level_outside_0_1_is_an_error(name, alpha):
+    """alpha 1.5 gave intervals with lower > upper (Eq18 on X: 1.218 > 1.203), alpha 0
+    infinite ones, without a word."""
+    est = make_surrogate(name).fit(X, Y)
+    with pytest.raises(SurrogateError, match=r"alpha must be in \(0, 1\)"):
+        est.predict_interval(X.iloc[:2], alpha=alpha)
+
+
+def test_eq18_interval_is_the_ols_prediction_interval():
+    """Against statsmodels' OLS on the same coded columns: mean +- t(0.95, n - p) * sqrt(s²
+    (1 + a (A'A)^-1 a')); equal to round-off (1e-10 relative)."""
+    import statsmodels.api as sm
+
+    from sensfw.surrogates.eq18 import design_matrix
+
+    Z = (X - (X.max() + X.min()) / 2) / ((X.max() - X.min()) / 2)
+    ref = sm.OLS(Y.to_numpy(), design_matrix(Z.to_numpy(), list("abc"))[0]).fit()
+    frame = ref.get_prediction(design_matrix(Z.to_numpy()[:5], list("abc"))[0]) \
+        .summary_frame(alpha=0.1)
+    lo, hi = make_surrogate("eq18").fit(X, Y).predict_interval(X.iloc[:5], alpha=0.1)
+    np.testing.assert_allclose(lo, frame["obs_ci_lower"], rtol=1e-10)
+    np.testing.assert_allclose(hi, frame["obs_ci_upper"], rtol=1e-10)
