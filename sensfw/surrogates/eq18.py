@@ -56,7 +56,7 @@ def aliased_terms(A: np.ndarray, terms: list[str], rtol: float = 1e-8) -> list[s
             if norm == 0 or np.linalg.norm(col - B @ c) <= rtol * norm:
                 parts = [f"{v:+.3g} {terms[k]}" for v, k in zip(c, kept, strict=True)
                          if abs(v) > 1e-6 * max(np.abs(c).max(), 1e-300)]
-                out.append(f"{terms[j]} = {' '.join(parts).lstrip('+')}")
+                out.append(f"{terms[j]} = {' '.join(parts).lstrip('+') or '0'}")
                 continue
         elif norm == 0:
             out.append(f"{terms[j]} = 0")
@@ -228,7 +228,7 @@ class Eq18(SurrogateBase):
             raise SurrogateError(
                 "Eq18: the runs cannot tell apart " + "; ".join(aliased) + " (a term the "
                 "design does not vary independently: a square on two levels, a variable "
-                "left at two levels by failed runs); Eq. 18 needs three levels of every "
+                "left at one or two levels by failed runs); Eq. 18 needs three levels of every "
                 "variable: a 3-level or response-surface design, or another surrogate")
         self.scale_ = column_scale(A)
         A = A / self.scale_

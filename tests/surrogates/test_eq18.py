@@ -145,3 +145,11 @@ def test_a_constant_response_has_undefined_fit_statistics(level):
     ref = sm.OLS(Y.to_numpy(), design_matrix(Z.to_numpy(), list(X.columns))[0]).fit()
     est = make_surrogate("eq18").fit(X, y)
     assert est.summary_["r2_adj"] == pytest.approx(ref.rsquared_adj, rel=1e-6)
+
+
+def test_a_variable_that_does_not_vary_is_named_as_zero():
+    """A variable held at one value codes to a zero column: its terms are 0, which the
+    message said as 'x3 = ; x1:x3 = ; ...' (an empty right-hand side)."""
+    Xc = X.assign(x3=5.0)
+    with pytest.raises(SurrogateError, match=r"x3 = 0; x1:x3 = 0; x2:x3 = 0; x3\^2 = 0 "):
+        make_surrogate("eq18").fit(Xc, Y)
