@@ -18,8 +18,17 @@ from ..surrogates.base import total_ss
 
 
 def _arrays(X, y):
+    """X and y as float arrays; an :class:`AnalysisError` where their lengths differ or a
+    response is not finite (a failed run: leave it out before validating)."""
     Xa = X.to_numpy(dtype=float) if isinstance(X, pd.DataFrame) else np.asarray(X, float)
-    return Xa, np.asarray(y, float).ravel()
+    ya = np.asarray(y, float).ravel()
+    if len(ya) != len(Xa):
+        raise AnalysisError(f"{len(ya)} responses for {len(Xa)} runs")
+    bad = int(np.sum(~np.isfinite(ya)))
+    if bad:
+        raise AnalysisError(f"{bad} of the {len(ya)} responses are not finite (failed runs): "
+                            "leave them out first")
+    return Xa, ya
 
 
 def q2_cv(estimator, X, y, splitter) -> float:

@@ -89,3 +89,28 @@ def test_random_forest_out_of_bag_q2_is_close_to_refit_leave_one_out():
                    KFold(n_splits=len(y)))
     assert 0.3 < refits < 0.95  # a case where the estimate is informative
     assert v["q2_loo"] == pytest.approx(refits, abs=0.05)
+
+
+def test_failed_or_missing_responses_are_an_analysis_error_not_a_wrong_number():
+    """A NaN response (a failed confirmation run) was counted as a run outside its
+    interval: 11 covered runs of 11 finished reported coverage 11/12 = 0.917; a length
+    mismatch was a bare numpy broadcasting ValueError."""
+    from sensfw.errors import AnalysisError
+
+    rng = np.random.default_rng(0)
+    X = pd.DataFrame(rng.uniform(-1, 1, (30, 2)), columns=["a", "b"])
+    y = 1 + X["a"] - X["b"] ** 2 + 0.01 * rng.standard_normal(30)
+    est = make_surrogate("eq18").fit(X, y)
+    yn = y.to_numpy().copy()
+    yn[0] = np.nan
+    for call in (lambda: confirmation(est, X.iloc[:12], yn[:12]),
+                 lambda: validate(est, X, yn)):
+        with pytest.raises(AnalysisError, match=r"1 of the .* not finite"):
+            call()
+    for call in (lambda: confirmation(est, X, y[:-1]), lambda: validate(est, X, y[:-1])):
+        with pytest.raises(AnalysisError, match="29 responses for 30 runs"):
+            call()
+    # the finished runs alone: coverage as counted by hand
+    lo, hi = est.predict_interval(X.iloc[1:12])
+    ref = np.mean((y[1:12] >= lo) & (y[1:12] <= hi))
+    assert confirmation(est, X.iloc[1:12], y[1:12])["coverage"] == pytest.approx(ref)
