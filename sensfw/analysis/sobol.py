@@ -7,6 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from ..errors import AnalysisError
+
 
 def sobol_indices(estimator, bounds: Sequence[tuple[float, float]], names: Sequence[str],
                   n: int = 1024, seed: int = 0, num_resamples: int = 200,
@@ -17,6 +19,13 @@ def sobol_indices(estimator, bounds: Sequence[tuple[float, float]], names: Seque
     from SALib.analyze import sobol as analyze
     from SALib.sample import sobol as sample
 
+    b = np.asarray(bounds, dtype=float)
+    if b.shape != (len(names), 2) or not np.all(b[:, 0] < b[:, 1]):
+        raise AnalysisError(f"sobol_indices: bounds must be {len(names)} pairs (low, high) "
+                            f"with low < high, one per name, got {b.tolist()}")
+    if n < 2 or n & (n - 1):
+        raise AnalysisError(f"sobol_indices: n must be a power of 2 (Sobol' sequence), "
+                            f"got {n}")
     problem = {"num_vars": len(names), "names": list(names),
                "bounds": [list(map(float, b)) for b in bounds]}
     X = sample.sample(problem, n, calc_second_order=False, seed=seed)
