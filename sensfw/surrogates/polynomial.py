@@ -9,7 +9,7 @@ from pydantic import Field
 
 from ..options import Int, Pairs, PluginOptions
 from ..plugins import surrogates
-from .base import BOUNDS, SurrogateBase, SurrogateError, scaling
+from .base import BOUNDS, SurrogateBase, SurrogateError, scaling, total_ss
 
 
 @surrogates.register("polynomial")
@@ -33,7 +33,7 @@ class Polynomial(SurrogateBase):
         self.cv = cv
 
     def fit(self, X, y):
-        from sklearn.linear_model import LassoLarsCV, LinearRegression
+        from sklearn.linear_model import LassoLars, LassoLarsCV, LinearRegression
         from sklearn.preprocessing import PolynomialFeatures
 
         X, y = self._begin_fit(X, y)
@@ -41,7 +41,13 @@ class Polynomial(SurrogateBase):
         self.features_ = PolynomialFeatures(self.degree, include_bias=False)
         A = self.features_.fit_transform((X - self.mid_) / self.half_)
         if self.selection == "lars":
-            self.model_ = LassoLarsCV(cv=min(self.cv, len(y))).fit(A, y)
+            if len(y) < 3:  # a fold trains on one run: LARS has no path
+                raise SurrogateError(f"Polynomial: selection='lars' cross-validates its "
+                                     f"penalty and needs at least 3 runs, got {len(y)}")
+            if total_ss(y) == 0:  # no path to cross-validate: every coefficient is 0
+                self.model_ = LassoLars(alpha=1.0).fit(A, y)
+            else:
+                self.model_ = LassoLarsCV(cv=min(self.cv, len(y))).fit(A, y)
         else:
             if len(y) <= A.shape[1]:
                 raise SurrogateError(f"Polynomial: {len(y)} runs (n_samples = {len(y)}) for "

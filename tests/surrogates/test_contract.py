@@ -170,3 +170,13 @@ def test_eq18_interval_is_the_ols_prediction_interval():
     lo, hi = make_surrogate("eq18").fit(X, Y).predict_interval(X.iloc[:5], alpha=0.1)
     np.testing.assert_allclose(lo, frame["obs_ci_lower"], rtol=1e-10)
     np.testing.assert_allclose(hi, frame["obs_ci_upper"], rtol=1e-10)
+
+
+def test_polynomial_lars_on_two_runs_or_a_constant_response():
+    """LassoLarsCV raised numpy's 'attempt to get argmin of an empty sequence' for both; a
+    constant response is fitted by its mean (every coefficient 0, one term)."""
+    with pytest.raises(SurrogateError, match="needs at least 3 runs, got 2"):
+        make_surrogate("polynomial", selection="lars").fit(X.iloc[:2], Y[:2])
+    est = make_surrogate("polynomial", selection="lars").fit(X, np.full(len(X), 0.1))
+    np.testing.assert_allclose(est.predict(X), 0.1, rtol=1e-12)
+    assert est.n_terms_ == 1
