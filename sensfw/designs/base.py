@@ -91,10 +91,18 @@ def check_groups(design: str, groups: dict[str, list[str]], names: list[str]
 
 
 def responses(table: pd.DataFrame, y, design: str) -> np.ndarray:
-    y = np.asarray(y, dtype=float).ravel()
+    """``y`` as a float vector, one per run of ``table`` (NaN: a failed run); an
+    :class:`AnalysisError` where it is not numeric, has another length, or has no finite
+    value."""
+    try:
+        y = np.asarray(y, dtype=float).ravel()
+    except (TypeError, ValueError) as err:
+        raise AnalysisError(f"{design}: the responses must be numbers ({err})") from None
     if len(y) != len(table):
         raise AnalysisError(f"{design}: {len(y)} responses for {len(table)} runs")
-    if len(y) and not np.isfinite(y).any():
+    if not len(y):
+        raise AnalysisError(f"{design}: no runs to analyse")
+    if not np.isfinite(y).any():
         raise AnalysisError(f"{design}: none of the {len(y)} runs has a score (every run "
                             "failed or scored NaN): there is nothing to analyse")
     return y

@@ -39,3 +39,17 @@ def test_design_contract(name):
     assert res.ranking[0] == SPACE.names[0], res.table
     with pytest.raises(DesignError, match=f"design '{name}': colour: unknown option; known: "):
         make_design(name, colour="red")
+
+
+@pytest.mark.parametrize("name", designs.names())
+def test_responses_that_are_no_numbers_or_none_at_all_are_analysis_errors(name):
+    """Strings were numpy's bare ValueError; no runs at all gave the definitive screening
+    design importances of 0 for every variable, and Sobol' a numpy reduction ValueError."""
+    from sensfw.errors import AnalysisError
+
+    design = make_design(name)
+    table = design.generate(SPACE, seed=3)
+    with pytest.raises(AnalysisError, match="responses must be numbers"):
+        design.analyze(SPACE, table, np.array(["fast"] * len(table)))
+    with pytest.raises(AnalysisError, match="no runs to analyse"):
+        design.analyze(SPACE, table.iloc[:0], np.zeros(0))
