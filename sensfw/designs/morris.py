@@ -76,6 +76,21 @@ class Morris(Design):
                           local_optimization=o["local_optimization"], seed=seed)
         return to_table(space, X, "morris")
 
+    def _check_trajectories(self, space: DesignSpace, Z: np.ndarray, step: int) -> None:
+        """Each trajectory's consecutive runs move one variable (one group), every one once:
+        elementary effects are differences of consecutive rows, so a table in another row
+        order gives wrong ones without a word."""
+        groups = self.options["groups"]
+        member = check_groups(self.name, groups, space.names) if groups else {}
+        group = np.array([member.get(v, v) for v in space.names])
+        for t, traj in enumerate(Z.reshape(-1, step, Z.shape[1])):
+            moved = [set(group[np.abs(d) > 1e-9]) for d in np.diff(traj, axis=0)]
+            if any(len(m) != 1 for m in moved) or len(set().union(*moved)) != step - 1:
+                raise AnalysisError(
+                    f"morris: trajectory {t + 1} (runs {t * step + 1}-{(t + 1) * step}) is not "
+                    "one-at-a-time steps of every variable once: the table is not in the "
+                    "order the design generated it")
+
     def analyze(self, space: DesignSpace, table: pd.DataFrame, y) -> ScreeningResult:
         from SALib.analyze import morris
 
@@ -92,6 +107,7 @@ class Morris(Design):
         if keep.sum() < 2:
             raise AnalysisError("morris: fewer than 2 complete trajectories; elementary effects "
                                 "need at least 2")
+        self._check_trajectories(space, space.code(table).to_numpy(), step)
         rows = np.repeat(keep, step)
         Z = space.code(table).to_numpy()[rows]
         res = morris.analyze(self._problem(space), Z, y[rows], num_resamples=

@@ -54,6 +54,28 @@ class Sobol(Design):
                          seed=0 if seed is None else seed)
         return to_table(space, X, "sobol")
 
+    def _check_layout(self, Z: np.ndarray) -> None:
+        """Saltelli's blocks per base sample: A, AB_1..AB_k (A with column i of B), with
+        ``second_order`` also BA_1..BA_k, then B. The estimators read rows by position, so
+        a table in another row order gives wrong indices without a word."""
+        k = Z.shape[1]
+        size = 2 * k + 2 if self.options["second_order"] else k + 2
+        blocks = Z.reshape(-1, size, k) if len(Z) % size == 0 else None
+        ok = blocks is not None
+        if ok:
+            A, B = blocks[:, 0], blocks[:, -1]
+            for i in range(k):
+                AB = A.copy()
+                AB[:, i] = B[:, i]
+                ok &= np.allclose(blocks[:, 1 + i], AB, atol=1e-9)
+                if self.options["second_order"]:
+                    BA = B.copy()
+                    BA[:, i] = A[:, i]
+                    ok &= np.allclose(blocks[:, 1 + k + i], BA, atol=1e-9)
+        if not ok:
+            raise AnalysisError(f"sobol: the table is not Saltelli's blocks of {size} runs "
+                                "(A, AB_i, ..., B) in the order the design generated them")
+
     def analyze(self, space, table, y) -> ScreeningResult:
         from SALib.analyze import sobol
 
@@ -62,6 +84,7 @@ class Sobol(Design):
             raise AnalysisError(f"sobol: {int((~np.isfinite(y)).sum())} failed runs; "
                                 "Saltelli's estimators need every run (rerun them or use a "
                                 "surrogate: sensfw.analysis.sobol.sobol_indices)")
+        self._check_layout(space.code(table).to_numpy())
         res = sobol.analyze(self._problem(space), y, calc_second_order=self.options[
             "second_order"], num_resamples=self.options["num_resamples"],
             conf_level=self.options["conf_level"], seed=0)
