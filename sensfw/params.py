@@ -287,6 +287,10 @@ class DesignSpace:
 
     def code(self, frame: pd.DataFrame) -> pd.DataFrame:
         """Physical design table -> coded (-1..1) table."""
+        missing = [n for n in self.names if n not in frame.columns]
+        if missing:
+            raise ParameterError(f"the design table has no column for design variable(s) "
+                                 f"{missing} (it has {list(frame.columns)})")
         return pd.DataFrame({v.name: v.code(frame[v.name].to_numpy()) for v in self.variables},
                             index=frame.index)
 

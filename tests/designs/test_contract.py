@@ -53,3 +53,15 @@ def test_responses_that_are_no_numbers_or_none_at_all_are_analysis_errors(name):
         design.analyze(SPACE, table, np.array(["fast"] * len(table)))
     with pytest.raises(AnalysisError, match="no runs to analyse"):
         design.analyze(SPACE, table.iloc[:0], np.zeros(0))
+
+
+@pytest.mark.parametrize("name", ["morris", "definitive_screening", "sobol"])
+def test_a_table_without_a_variable_is_a_parameter_error(name):
+    """The coded analyses raised a bare KeyError: 'slide_damping'."""
+    from sensfw.errors import ParameterError
+
+    design = make_design(name)
+    table = design.generate(SPACE, seed=3)
+    with pytest.raises(ParameterError, match=r"no column for design variable\(s\) "
+                                             r"\['slide_damping'\]"):
+        design.analyze(SPACE, table.drop(columns="slide_damping"), np.ones(len(table)))
