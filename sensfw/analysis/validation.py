@@ -49,14 +49,16 @@ def q2_cv(estimator, X, y, splitter) -> float:
 
 
 def vif(X) -> dict[str, float]:
-    """Variance inflation factors of the columns of X (1 = orthogonal)."""
+    """Variance inflation factors of the columns of X (1 = orthogonal; inf for a column that
+    does not vary, which the intercept reproduces exactly)."""
     from statsmodels.stats.outliers_influence import variance_inflation_factor
 
     Xa, _ = _arrays(X, np.zeros(len(X)))
     names = list(X.columns) if isinstance(X, pd.DataFrame) else [f"x{i + 1}" for i in
                                                                  range(Xa.shape[1])]
     A = np.column_stack([np.ones(len(Xa)), Xa])
-    return {n: float(variance_inflation_factor(A, i + 1)) for i, n in enumerate(names)}
+    return {n: float(variance_inflation_factor(A, i + 1)) if total_ss(Xa[:, i]) > 0
+            else float("inf") for i, n in enumerate(names)}
 
 
 def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:

@@ -136,3 +136,19 @@ def test_sobol_indices_checks_its_box_and_sample_size():
     ref = ishigami_indices()
     np.testing.assert_allclose(idx["S1"], ref["S1"], atol=0.01)
     np.testing.assert_allclose(idx["ST"], ref["ST"], atol=0.01)
+
+
+@pytest.mark.parametrize("level", [1.0, 0.1, 0.0])
+def test_vif_of_a_column_that_does_not_vary_is_infinite(level):
+    """VIF_j = 1 / (1 - R²_j) with R²_j of x_j on the others and the intercept: a constant
+    x_j is the intercept times a number, R²_j = 1. statsmodels' 0/0 gave 1.0 ('orthogonal')
+    for 1.0 and 0.1 and NaN for 0.0. The varying columns keep their VIF: two independent
+    columns' VIF 1 / (1 - r²) with r their correlation."""
+    from sensfw.analysis.validation import vif
+
+    rng = np.random.default_rng(0)
+    X = pd.DataFrame(rng.uniform(0, 1, (12, 2)), columns=["a", "b"])
+    out = vif(X.assign(c=level))
+    assert out["c"] == np.inf
+    r = np.corrcoef(X["a"], X["b"])[0, 1]
+    assert out["a"] == pytest.approx(1 / (1 - r**2), rel=1e-9)
