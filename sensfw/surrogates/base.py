@@ -180,6 +180,11 @@ def scaling(est, X: np.ndarray, bounds) -> tuple[np.ndarray, np.ndarray]:
             raise SurrogateError(f"{type(est).__name__}: bounds must be {X.shape[1]} pairs "
                                  f"(low, high), got shape {b.shape}", option="bounds")
         lo, hi = b[:, 0], b[:, 1]
+        if not np.all(lo < hi):  # reversed or empty: a coding of the wrong scale, silently
+            names = feature_names(est)
+            bad = [f"{names[j]}: ({lo[j]:g}, {hi[j]:g})" for j in np.flatnonzero(~(lo < hi))]
+            raise SurrogateError(f"{type(est).__name__}: bounds must have low < high, got "
+                                 f"{', '.join(bad)}", option="bounds")
     half = (hi - lo) / 2
     half = np.where(half > 0, half, 1.0)
     return (hi + lo) / 2, half

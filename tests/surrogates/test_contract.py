@@ -180,3 +180,14 @@ def test_polynomial_lars_on_two_runs_or_a_constant_response():
     est = make_surrogate("polynomial", selection="lars").fit(X, np.full(len(X), 0.1))
     np.testing.assert_allclose(est.predict(X), 0.1, rtol=1e-12)
     assert est.n_terms_ == 1
+
+
+@pytest.mark.parametrize("name", ["eq18", "polynomial", "gaussian_process"])
+@pytest.mark.parametrize("bad", [(1.0, -1.0), (0.5, 0.5)])
+def test_bounds_with_low_not_below_high_are_refused(name, bad):
+    """Reversed or empty bounds fitted silently with a half-range of 1 in place of theirs:
+    Eq. 18's coded coefficients were then in no coding at all."""
+    bounds = [(-1.0, 1.0), bad, (-1.0, 1.0)]
+    with pytest.raises(SurrogateError, match=r"bounds must have low < high, got b: ") as err:
+        make_surrogate(name, bounds=bounds).fit(X, Y)
+    assert err.value.option == "bounds"
