@@ -193,7 +193,8 @@ class Eq18(SurrogateBase):
         U = X.copy()
         if self.log_mask_.any():
             if np.any(X[:, self.log_mask_] <= 0):
-                raise SurrogateError("Eq18: log features need positive values")
+                raise SurrogateError("Eq18: log features need positive values",
+                                     option="log_features")
             U[:, self.log_mask_] = np.log10(X[:, self.log_mask_])
         return U
 
@@ -209,12 +210,13 @@ class Eq18(SurrogateBase):
                 raise SurrogateError("Eq18: log_response needs positive responses")
             y = np.log(y)
         names = feature_names(self)
+        b = None if self.bounds is None else np.asarray(self.bounds, float)
+        if b is not None and b.shape != (X.shape[1], 2):
+            raise SurrogateError(f"Eq18: bounds must be {X.shape[1]} pairs (low, high), got "
+                                 f"shape {b.shape}", option="bounds")
         self.log_mask_ = self._logs(X, names)
         U = self._features(X)
-        bounds = None
-        if self.bounds is not None:
-            b = np.asarray(self.bounds, float)
-            bounds = np.where(self.log_mask_[:, None], np.log10(np.abs(b) + 1e-300), b)
+        bounds = None if b is None else self._features(b.T).T
         self.mid_, self.half_ = scaling(self, U, bounds)
         fnames = [f"log10({n})" if lg else n for n, lg in zip(names, self.log_mask_,
                                                                strict=True)]

@@ -70,8 +70,13 @@ class GaussianProcess(SurrogateBase):
         self.log_features = log_features
 
     def _transform(self, X):
+        """log10 of the log features; they must be positive (a clamp at 1e-300 turned a
+        value <= 0 into -300 and the predictions into the prior mean)."""
         X = X.copy()
-        X[:, self.log_mask_] = np.log10(np.maximum(X[:, self.log_mask_], 1e-300))
+        if np.any(X[:, self.log_mask_] <= 0):
+            raise SurrogateError("GaussianProcess: log features need positive values",
+                                 option="log_features")
+        X[:, self.log_mask_] = np.log10(X[:, self.log_mask_])
         return X
 
     def fit(self, X, y):
@@ -100,7 +105,7 @@ class GaussianProcess(SurrogateBase):
             self.log_mask_ = np.array([n in self.log_features for n in names])
         X = self._transform(X)
         if b is not None:
-            b = np.where(self.log_mask_[:, None], np.log10(np.maximum(b, 1e-300)), b)
+            b = self._transform(b.T).T
         mid, half = scaling(self, X, b)
         self.lo_, self.span_ = mid - half, 2 * half
         # standardise y here (as normalize_y=True would) so that leave-one-out predictions

@@ -191,3 +191,21 @@ def test_bounds_with_low_not_below_high_are_refused(name, bad):
     with pytest.raises(SurrogateError, match=r"bounds must have low < high, got b: ") as err:
         make_surrogate(name, bounds=bounds).fit(X, Y)
     assert err.value.option == "bounds"
+
+
+def test_log_features_need_positive_values_and_bounds_of_the_right_shape():
+    """The GP clamped log features at 1e-300: a value <= 0 became log10 = -300 (on X - 0.5
+    a fit that predicted 1.21 where the response is 0.92, without a word); Eq18 took
+    log10(|low|) of a negative bound; and Eq18 broadcast one (low, high) pair over every
+    variable."""
+    Xp = X + 2.0  # positive
+    for name in ("eq18", "gaussian_process"):
+        with pytest.raises(SurrogateError, match="log features need positive values"):
+            make_surrogate(name, log_features=["a"]).fit(X, Y)
+        with pytest.raises(SurrogateError, match="log features need positive values"):
+            make_surrogate(name, log_features=["a"], bounds=[(-1.0, 3.0)] * 3).fit(Xp, Y)
+        est = make_surrogate(name, log_features=["a"]).fit(Xp, Y)
+        with pytest.raises(SurrogateError, match="log features need positive values"):
+            est.predict(X)
+    with pytest.raises(SurrogateError, match=r"bounds must be 3 pairs .* shape \(1, 2\)"):
+        make_surrogate("eq18", bounds=[(1.0, 3.0)]).fit(Xp, Y)
