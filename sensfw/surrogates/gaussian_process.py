@@ -32,6 +32,12 @@ def _kernel(value):
     return value
 
 
+def _parts(kernel) -> list:
+    """A kernel and every kernel it is made of (sums, products, exponents)."""
+    subs = [getattr(kernel, a) for a in ("k1", "k2", "kernel") if hasattr(kernel, a)]
+    return [kernel, *(p for k in subs for p in _parts(k))]
+
+
 @surrogates.register("gaussian_process")
 class GaussianProcess(SurrogateBase):
     """``C * RBF(length scale per input) + White`` on inputs scaled to [0, 1] (``bounds`` or
@@ -116,6 +122,10 @@ class GaussianProcess(SurrogateBase):
         d = X.shape[1]
         if self.kernel is not None:  # a fitted kernel (``model_.kernel_``) to start from
             kernel = self.kernel
+            scales = [np.size(getattr(k, "length_scale", 1.0)) for k in _parts(kernel)]
+            if any(n not in (1, d) for n in scales):
+                raise SurrogateError(f"GaussianProcess: the kernel has {max(scales)} length "
+                                     f"scales for {d} inputs", option="kernel")
         else:
             kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF([0.5] * d, (1e-2, 1e2))
             if self.noise:

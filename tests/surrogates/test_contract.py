@@ -209,3 +209,17 @@ def test_log_features_need_positive_values_and_bounds_of_the_right_shape():
             est.predict(X)
     with pytest.raises(SurrogateError, match=r"bounds must be 3 pairs .* shape \(1, 2\)"):
         make_surrogate("eq18", bounds=[(1.0, 3.0)]).fit(Xp, Y)
+
+
+def test_a_kernel_of_other_dimensions_is_a_surrogate_error():
+    """An anisotropic kernel fitted on other inputs raised scikit-learn's bare ValueError
+    ('Anisotropic kernel must have the same number of dimensions as data (2!=3)'); one
+    fitted on the same inputs is taken (``model_.kernel_`` restarts a search)."""
+    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+    kernel = ConstantKernel() * RBF([1.0, 1.0]) + WhiteKernel()
+    with pytest.raises(SurrogateError, match="the kernel has 2 length scales for 3 inputs"):
+        make_surrogate("gaussian_process", kernel=kernel).fit(X, Y)
+    fitted = make_surrogate("gaussian_process").fit(X, Y).model_.kernel_
+    again = make_surrogate("gaussian_process", kernel=fitted, optimize=False).fit(X, Y)
+    assert again.model_.kernel_ == fitted
