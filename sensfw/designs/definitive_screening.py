@@ -25,7 +25,7 @@ from scipy import stats
 from ..options import Float, Int, PluginOptions
 from ..plugins import designs
 from ._coded import to_table
-from .base import Design, DesignError, ScreeningResult, relative, responses
+from .base import ROUND_OFF, Design, DesignError, ScreeningResult, relative, responses
 
 
 def _is_prime(n: int) -> bool:
@@ -111,7 +111,8 @@ class DefinitiveScreening(Design):
             cov = s2 * np.linalg.pinv(A.T @ A)
             return coef, np.sqrt(np.diag(cov)), dof
 
-        while True:  # forward selection of quadratic terms (Bonferroni over the candidates)
+        flat = np.ptp(yy) <= ROUND_OFF * np.max(np.abs(yy))  # effects and SEs are round-off
+        while not flat:  # forward selection of quadratic terms (Bonferroni over candidates)
             coef, se, dof = fit(quads)
             best, best_p = None, alpha / max(k - len(quads), 1)
             for j in range(k):
@@ -129,8 +130,8 @@ class DefinitiveScreening(Design):
             quads.append(best)
         coef, se, dof = fit(quads)
         main = coef[1:k + 1]
-        if se is not None and dof > 0:
-            with np.errstate(divide="ignore", invalid="ignore"):  # 0 / 0: a constant response
+        if se is not None and dof > 0 and not flat:
+            with np.errstate(divide="ignore", invalid="ignore"):
                 p_main = 2 * stats.t.sf(np.abs(main / se[1:k + 1]), dof)
         else:
             p_main = np.full(k, np.nan)

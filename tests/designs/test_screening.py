@@ -340,3 +340,17 @@ def test_position_reading_analyses_refuse_a_table_out_of_its_order(name, options
     perm = np.random.default_rng(0).permutation(len(table))
     with pytest.raises(AnalysisError, match="order the design generated"):
         design.analyze(space, table.iloc[perm], y[perm])
+
+
+@pytest.mark.parametrize("k, level", [(8, 3.0), (4, 1234.5), (6, 0.1)])
+def test_definitive_screening_of_a_constant_response_flags_nothing(k, level):
+    """A constant response has no effect to test (t = round-off / round-off): 8 variables at
+    3.0 came out all 'active' at p = 0.0 with a curvature term, 4 at 1234.5 with a curvature
+    term, 6 at 0.1 with p = 0.615 for every variable."""
+    space = unit_space(k)
+    design = make_design("definitive_screening")
+    table = design.generate(space)
+    res = design.analyze(space, table, np.full(len(table), level))
+    assert not res.table["active"].any() and not res.table["curvature"].any()
+    assert res.table["p"].isna().all()
+    assert (res.importance == 0).all()
