@@ -255,6 +255,9 @@ class Eq18(SurrogateBase):
         h = res.get_influence().hat_matrix_diag
         e = res.resid
         ss_tot = total_ss(y)
+        if ss_tot == 0:  # a constant response: every t is round-off over round-off
+            for table in (self.coefficients_, self.coefficients_physical_):
+                table[["se", "t", "p"]] = [0.0, np.nan, np.nan]
         # a run of leverage 1 (a lone centre point of a saturated design) is fitted exactly
         # whatever its value: its left-out prediction, and so PRESS, is undefined
         press = float(np.sum((e / (1 - h)) ** 2)) if np.all(h < 1 - 1e-9) else np.nan

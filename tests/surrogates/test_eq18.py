@@ -153,3 +153,15 @@ def test_a_variable_that_does_not_vary_is_named_as_zero():
     Xc = X.assign(x3=5.0)
     with pytest.raises(SurrogateError, match=r"x3 = 0; x1:x3 = 0; x2:x3 = 0; x3\^2 = 0 "):
         make_surrogate("eq18").fit(Xc, Y)
+
+
+@pytest.mark.parametrize("level", [3.0, 0.1, 7.77])
+def test_a_constant_response_flags_no_term(level):
+    """On the 3^4 grid a constant response had 4-6 of its 15 terms 'significant' at
+    p < 0.05 (7.77: x1 p = 0.008, x2 p = 0.003, ...), t being round-off over round-off;
+    Fig. 10b's significance and the agreement criteria read these p-values."""
+    X4 = pd.DataFrame(list(itertools.product([-1.0, 0.0, 1.0], repeat=4)), columns=list("abcd"))
+    est = make_surrogate("eq18").fit(X4, np.full(81, level))
+    for table in (est.coefficient_table_, est.coefficient_table_coded_):
+        assert table["p"].isna().all() and table["t"].isna().all()
+    assert est.coefficient_table_coded_["estimate"].iloc[0] == pytest.approx(level)
