@@ -147,21 +147,6 @@ def check_data(est, X, y: Any = "no_validation", *, reset: bool):
                              f"{y.dtype} ({err})") from None
 
 
-#: a response whose spread is at most this fraction of its largest magnitude is constant up
-#: to round-off: ``np.full(27, 0.1)`` has a mean that differs from 0.1 in its last bit, and
-#: an SS_tot of 1e-31 made R² -2.1 and Q² -9.5 out of nothing
-ROUND_OFF = 1e-12
-
-
-def total_ss(y) -> float:
-    """SS_tot of ``y`` about its mean; 0 where ``y`` is constant up to :data:`ROUND_OFF`
-    (then R², R²adj, F and Q² are undefined)."""
-    y = np.asarray(y, float)
-    if y.size == 0 or np.ptp(y) <= ROUND_OFF * np.max(np.abs(y)):
-        return 0.0
-    return float(np.sum((y - y.mean()) ** 2))
-
-
 def feature_names(est) -> list[str]:
     """Names of the fitted features: the DataFrame's columns, else ``x1 .. xn``."""
     names = getattr(est, "feature_names_in_", None)

@@ -28,6 +28,7 @@ import pandas as pd
 from pydantic import Field, model_validator
 from sklearn.utils.validation import check_is_fitted
 
+from ..analysis.validation import total_ss
 from ..options import Bool, Pairs, PluginOptions, Str
 from ..plugins import surrogates
 from .base import (
@@ -37,7 +38,6 @@ from .base import (
     check_alpha,
     feature_names,
     scaling,
-    total_ss,
 )
 
 

@@ -7,9 +7,10 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
+from ..analysis.validation import total_ss
 from ..options import Int, Pairs, PluginOptions
 from ..plugins import surrogates
-from .base import BOUNDS, SurrogateBase, SurrogateError, scaling, total_ss
+from .base import BOUNDS, SurrogateBase, SurrogateError, scaling
 
 
 @surrogates.register("polynomial")
