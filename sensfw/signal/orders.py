@@ -54,20 +54,15 @@ def _phase(f_inst: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     return phi, dphi
 
 
-#: kernel elements computed at once (orders x samples): 32 MB of complex128, whatever the
-#: number of orders (they were built at once: 321 orders of a 10 s record at 20 kHz, 1 GB)
-_BLOCK = 2**21
-
-
 def _kernel(orders: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """``exp(-i n phi)`` for every order (rows): by recurrence on an evenly spaced order grid
     (one complex multiply per order instead of an exponential; error ~1e-12), directly
     otherwise."""
     d = np.diff(orders)
-    if len(orders) > 2 and np.allclose(d, d[0], rtol=0, atol=1e-12):
+    if len(orders) > 2 and np.allclose(d, d[0], rtol=0, atol=1e-12) and orders[0] == 0:
         step = np.exp(-1j * d[0] * phi)
         E = np.empty((len(orders), len(phi)), complex)
-        E[0] = np.exp(-1j * orders[0] * phi)
+        E[0] = 1.0
         for j in range(1, len(orders)):
             np.multiply(E[j - 1], step, out=E[j])
         return E
@@ -97,13 +92,7 @@ def _frames(x: np.ndarray, fs: float, fr: np.ndarray, orders: np.ndarray, W: int
         vals.append(_window(window, u[ok]))
     Wm = sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                            shape=(n_frames, len(x)))
-    xd = x * dphi
-    X = np.empty((len(orders), n_frames), complex)
-    block = max(1, _BLOCK // len(x))  # orders at a time
-    for i in range(0, len(orders), block):
-        E = _kernel(orders[i:i + block], phi)
-        E *= xd
-        X[i:i + block] = (Wm @ E.T).T
+    X = (Wm @ (_kernel(orders, phi) * (x * dphi)).T).T  # (n_orders, n_frames)
     norm = Wm @ dphi  # integral of the window over each frame's angle
     peak = np.abs(X) / norm
     peak[orders > 0] *= 2.0  # one-sided: a cosine of amplitude A gives |X| = A/2 * int w

@@ -114,28 +114,3 @@ def test_bad_order_arguments_are_signal_errors():
     with pytest.raises(SignalError, match="equally long"):
         thd_from_spectrum(orders, P[:40])
     assert thd_from_spectrum(orders, P) == pytest.approx(100 * np.hypot(A2, A3), rel=1e-6)
-
-
-def test_order_spectrum_memory_does_not_grow_with_the_number_of_orders(monkeypatch):
-    """A 2 s sweep to 500 Hz at 20 kHz has 321 orders (to 20 in 1/16 steps); their kernels
-    were built at once, 321 x 40000 complex (205 MB, twice: ~410 MB peak); in blocks of
-    2^21 elements (34 MB) the peak stays under 100 MB. Blocks of one order give the same spectrum
-    to 1e-12 (the recurrence restarts per block), and the orders' amplitudes are A1 and
-    A2 RMS to 1e-6."""
-    import tracemalloc
-
-    from sensfw.signal import orders as om
-
-    f0, f1, T = 50.0, 500.0, 2.0
-    x, fi = swept(f1, f0=f0, T=T)
-    tracemalloc.start()
-    o, P = order_spectrum(x, FS, fi)
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    assert len(o) == 321
-    assert peak < 100e6
-    assert P[16] == pytest.approx(1 / np.sqrt(2), rel=1e-6)
-    assert P[32] == pytest.approx(A2 / np.sqrt(2), rel=1e-6)
-    monkeypatch.setattr(om, "_BLOCK", 1)
-    _, P1 = order_spectrum(x, FS, fi)
-    np.testing.assert_allclose(P1, P, rtol=0, atol=1e-12)
