@@ -69,9 +69,13 @@ def vif(X) -> dict[str, float]:
     Xa, _ = _arrays(X, np.zeros(len(X)))
     names = list(X.columns) if isinstance(X, pd.DataFrame) else [f"x{i + 1}" for i in
                                                                  range(Xa.shape[1])]
-    A = np.column_stack([np.ones(len(Xa)), Xa])
-    return {n: float(variance_inflation_factor(A, i + 1)) if total_ss(Xa[:, i]) > 0
-            else float("inf") for i, n in enumerate(names)}
+    # a column that does not vary lies in the intercept's span: leaving it out changes no
+    # other column's R^2_j, and keeps the matrix the others are regressed on of full rank
+    varies = [i for i in range(Xa.shape[1]) if total_ss(Xa[:, i]) > 0]
+    A = np.column_stack([np.ones(len(Xa)), Xa[:, varies]])
+    at = {i: k + 1 for k, i in enumerate(varies)}
+    return {n: float(variance_inflation_factor(A, at[i])) if i in at else float("inf")
+            for i, n in enumerate(names)}
 
 
 def validate(estimator, X, y, k: int = 5, seed: int = 0) -> dict:
