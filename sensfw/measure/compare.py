@@ -196,8 +196,6 @@ def _add_twins(study, measurements, runner, values, effects, levels, twins: int)
     """Run each record's model again on ``twins`` twin drives (:func:`twin_drive`) and keep
     the twins' FRFs and peaks in its comparison (``db_twins``, ``peaks_twins``), and in
     each resonance row the model's own scatter of its frequency (``model_scatter_pct``)."""
-    from ..evaluate import simulate, variant_spec
-
     specs = [variant_spec(study, dict(values or {}), twin_drive(m.drive, k), effects)
              for k in range(1, twins + 1) for m in measurements]
     sims, _ = simulate(runner, specs, "model twins")
