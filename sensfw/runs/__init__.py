@@ -43,10 +43,13 @@ class Progress:
 def _outgrown(rec: dict, spec: RunSpec) -> bool:
     """A stored failure that was a timeout shorter than ``spec``'s: the timeout is not part
     of a run's key (it is the machine's limit, not the run's), so a run stopped at 0.3 s is
-    tried again under 120 s instead of being handed back as failed."""
+    tried again under 120 s, or with no timeout at all, instead of being handed back as
+    failed."""
     error = str(rec.get("error") or "")
-    if not error.startswith("timeout:") or not spec.timeout:
+    if not error.startswith("timeout:"):
         return False
+    if not spec.timeout:  # no limit now: longer than any it ran out of
+        return True
     before = rec.get("timeout")
     if before is None:  # stored before the timeout was: read it from the message
         m = re.search(r"after ([0-9.eE+-]+) s", error)

@@ -147,3 +147,21 @@ def test_a_damaged_entry_is_named_damaged_not_missing(tmp_path):
         StoredRuns(store).run([s])
     with pytest.raises(MissingRunError, match="is not in the run store"):
         StoredRuns(store).run([spec(k1=5100.0)])
+
+
+def test_a_run_that_timed_out_is_run_again_without_a_timeout(tmp_path):
+    """A study file without a timeout means no limit ("leave it out for no timeout"), the
+    longest there is: a run stored as 'timeout: no result after 0.3 s' was handed back as
+    failed there (until --retry-failed), although it had only run out of a shorter limit."""
+    from sensfw.runs import Runner, RunResult
+
+    m = models.get("two_dof")()
+    short = RunSpec.create(m, m.parameters().complete({}), EX, SolverSettings(timeout=0.3))
+    unlimited = RunSpec.create(m, m.parameters().complete({}), EX, SolverSettings())
+    assert unlimited.timeout is None and short.key() == unlimited.key()
+    store = RunStore(tmp_path)
+    store.save(short, RunResult(short.key(), False, error="timeout: no result after 0.3 s"))
+    with Runner(store, backend="serial") as runner:
+        assert runner.run([unlimited]) == {unlimited.key(): "ok"}
+        assert runner.counts.new == 1
+    assert store.load(unlimited.key()).ok
