@@ -6,7 +6,8 @@ file in the same folder and renamed into place (atomic on POSIX), the signal fil
 JSON is the commit record. A run is complete only when its JSON exists and the checksum in it
 matches the signal file; anything else (killed writer, truncated or corrupted file) reads as
 absent and is recomputed. Two writers of the same key write identical content, so concurrent
-workers cannot corrupt an entry.
+workers cannot corrupt an entry; a failure (a timeout, a dead worker) never replaces a
+finished run of the same key (:meth:`RunStore.save`).
 """
 
 from __future__ import annotations
@@ -109,7 +110,14 @@ class RunStore:
                          wall=meta.get("wall", 0.0), cached=True)
 
     def save(self, spec: RunSpec, result: RunResult) -> None:
-        """Commit ``result`` of ``spec`` (signal file first, then the JSON record)."""
+        """Commit ``result`` of ``spec`` (signal file first, then the JSON record). A failure
+        never replaces an intact finished run of the same key: a run's signals follow from
+        its key, so a failure after a success is the machine's (another writer's run that
+        timed out or whose worker died), and the finished run stays."""
+        if not result.ok:
+            held = self._own_record(result.key)
+            if held is not None and held["status"] == "ok":
+                return
         self.folder.mkdir(parents=True, exist_ok=True)
         meta_path, data_path = self._paths(result.key)
         meta = {"key": result.key, "status": "ok" if result.ok else "failed",

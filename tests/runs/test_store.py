@@ -165,3 +165,27 @@ def test_a_run_that_timed_out_is_run_again_without_a_timeout(tmp_path):
         assert runner.run([unlimited]) == {unlimited.key(): "ok"}
         assert runner.counts.new == 1
     assert store.load(unlimited.key()).ok
+
+
+def test_a_failure_does_not_replace_a_finished_run_of_the_same_key(tmp_path):
+    """Two writers of one store (a study run twice at once, on a loaded machine): one
+    finishes the run, the other's copy of it times out and is saved after it. The finished
+    run was overwritten by the failure ('failed', handed back as such on resume); it
+    stays."""
+    from sensfw.runs import RunResult
+
+    store = RunStore(tmp_path)
+    s = spec()
+    done = execute(s)
+    store.save(s, done)
+    store.save(s, RunResult(s.key(), False, error="timeout: no result after 0.3 s"))
+    assert store.record(s.key())["status"] == "ok"
+    back = store.load(s.key())
+    assert back.ok and np.array_equal(back.signals.channels["a1"], done.signals.channels["a1"])
+    # a failure still replaces a failure, and a success a failure
+    other = spec(k1=5100.0)
+    store.save(other, RunResult(other.key(), False, error="timeout: no result after 0.3 s"))
+    store.save(other, RunResult(other.key(), False, error="worker process died (exit code -9)"))
+    assert "died" in store.record(other.key())["error"]
+    store.save(other, execute(other))
+    assert store.record(other.key())["status"] == "ok"
