@@ -16,6 +16,7 @@ Loaded values are converted to SI (:mod:`sensfw.measure.columns`). Problems rais
 
 from __future__ import annotations
 
+import difflib
 import re
 from pathlib import Path
 
@@ -83,17 +84,40 @@ def read_csv(path: str | Path) -> Measurement:
     if data.shape[1] != len(names):
         raise MeasurementError(file, f"{data.shape[1]} data columns but {len(names)} headers")
     side = sidecar(path)
-    for name, unit in side.get("units", {}).items():
+    side_units = _sidecar_units(file, side, names)
+    for name, unit in side_units.items():
         said = header_units.get(name)
         if said is not None and said != unit:
             raise MeasurementError(file, f"the header says {said!r}, the sidecar "
                                    f"{path.with_suffix('.toml').name} says {unit!r}", name)
-    unit_map = {**header_units, **side.get("units", {})}
+    unit_map = {**header_units, **side_units}
     columns = {}
     for i, name in enumerate(names):
         unit = unit_map.get(name)
         columns[name] = data[:, i] * factor(file, name, unit, target(name, unit))
     return assemble(file, columns, unit_map, side.get("fs"), side.get("level"))
+
+
+def _sidecar_units(file: str, side: dict, names: list[str]) -> dict[str, str]:
+    """The sidecar's ``[units]`` (column -> unit; ``Time``, ``FORCE`` as the header reads
+    them), each of a column the file has: a unit for a misspelt column would be dropped
+    and the column read in the default unit (a response in g taken as m/s^2, 9.8 times
+    too small)."""
+    given = side.get("units", {})
+    if not isinstance(given, dict):
+        raise MeasurementError(file, f"the sidecar's units = {given!r}: a table of column "
+                                     "-> unit ([units] a1 = \"g\")")
+    out = {}
+    for name, unit in given.items():
+        key = name.lower() if name.lower() in ("time", "force") else name
+        if key not in names:
+            close = difflib.get_close_matches(key, names, n=1, cutoff=0.5)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise MeasurementError(file, f"the sidecar gives the unit {unit!r} for a column "
+                                         f"the file does not have (columns: "
+                                         f"{', '.join(names)}){hint}", name)
+        out[key] = str(unit)
+    return out
 
 
 def _is_number(text: str) -> bool:

@@ -533,3 +533,24 @@ def test_common_csv_shapes_are_read_or_named(tmp_path, good):
     with pytest.raises(MeasurementError, match=r"channel 'force': the excitation is constant "
                                                r"\(0\.05\)"):
         prepare(load(csv(tmp_path, flat, "flat.csv")), two_dof_study())
+
+
+def test_a_sidecar_unit_for_a_column_the_file_lacks_is_named(tmp_path, good):
+    """A sidecar's ``[units]`` entry for a misspelt column was dropped without a word and
+    the column read in the default unit: 'acc1 = "g"' for the column a1 left a1 in m/s^2,
+    9.81 times too small against the g it was recorded in. It is refused naming the entry
+    and the column meant; ``Force``/``TIME`` keys read as the header's do."""
+    f = csv(tmp_path, good, "side.csv")
+    text = f.read_text().replace("force [N]", "force").replace("a1 [m/s^2]", "a1")
+    f.write_text(text)
+    f.with_suffix(".toml").write_text('[units]\nacc1 = "g"\n')
+    with pytest.raises(MeasurementError, match=r"side\.csv, channel 'acc1': the sidecar "
+                                               r"gives the unit 'g' for a column the file "
+                                               r"does not have .*did you mean 'a1'\?"):
+        load(f)
+    f.with_suffix(".toml").write_text('[units]\na1 = "g"\nForce = "kN"\n')
+    m = load(f)
+    np.testing.assert_allclose(m.signals.channels["a1"], good.channels["a1"] * 9.80665,
+                               rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(m.signals.force, good.force * 1e3, rtol=1e-8, atol=1e-12)
+    assert m.signals.units["force"] == "N"
