@@ -195,13 +195,18 @@ class ProcessPool:
                         spec = pending.popleft()
                         w.tasks.send(spec)
                         busy[wid] = (spec, time.monotonic())
+                # every result that has come, before any run is judged timed out: a run
+                # whose result waited while another was saved has finished in time
                 try:
-                    wid, res = self._results.get(timeout=poll)
-                    if wid in busy and busy[wid][0].key() == res.key:
-                        spec, _ = busy.pop(wid)
-                        if res.wall:
-                            self._walls[kinds[id(spec)]] = res.wall
-                        on_result(spec, res)
+                    item = self._results.get(timeout=poll)
+                    while True:
+                        wid, res = item
+                        if wid in busy and busy[wid][0].key() == res.key:
+                            spec, _ = busy.pop(wid)
+                            if res.wall:
+                                self._walls[kinds[id(spec)]] = res.wall
+                            on_result(spec, res)
+                        item = self._results.get_nowait()
                 except queue.Empty:
                     pass
                 now = time.monotonic()

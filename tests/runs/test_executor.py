@@ -1,6 +1,8 @@
 """Executors: results stream back one by one; hangs, crashes and failures become failed runs
 without losing the others."""
 
+import time
+
 import pytest
 from sensfw_test_models import FAULT_INJECTION
 
@@ -94,3 +96,36 @@ def test_a_pool_sends_the_longest_runs_first():
                  spec(0.7, long_)]
         got = [s.params["x1"] for s in pool.order(batch)]
     assert got == [0.6, 0.4, 0.7, 0.3, 0.5]
+
+
+@pytest.mark.slow  # a worker pool
+def test_a_run_whose_result_waits_behind_another_is_not_timed_out():
+    """The pool read one result per round and then judged the busy runs' timeouts: a run
+    that finished in 1 s of its 3 s, while the result before it was being saved (5 s here:
+    a slow disk, a large signal file), was killed and recorded as 'timeout: no result after
+    3 s', its result in the queue thrown away. Every result that has come is now taken
+    first."""
+    from sensfw.runs.executor import ProcessPool
+
+    faults = {"model": "ishigami", "hang": {"parameter": "x2", "above": 2.5},
+              "hang_seconds": 1.0}
+    m = models.get(FAULT_INJECTION)(**faults)
+    ref = {"name": FAULT_INJECTION, "options": faults}
+
+    def spec(p):
+        return RunSpec.create(m, m.parameters().complete(p), EX,
+                              SolverSettings(timeout=3.0), ref)
+
+    got = {}
+
+    def slow_save(spec, res):
+        got[spec.key()] = res
+        if len(got) == 1:  # the first result of the batch takes 5 s to save
+            time.sleep(5.0)
+
+    with ProcessPool(2) as pool:
+        pool.map([spec({"x1": 0.2}), spec({"x1": 0.3})], lambda s, r: None)  # started
+        quick, waits = spec({"x1": 0.1}), spec({"x2": 3.0})
+        pool.map([quick, waits], slow_save)
+    assert got[quick.key()].ok
+    assert got[waits.key()].ok, got[waits.key()].error
