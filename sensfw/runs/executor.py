@@ -34,8 +34,17 @@ def _child(conn, spec: RunSpec) -> None:
     conn.close()
 
 
-_CHILD = ("import pickle, sys; from sensfw.runs.spec import execute; "
-          "sys.stdout.buffer.write(pickle.dumps(execute(pickle.loads(sys.stdin.buffer.read()))))")
+#: the child of :func:`_execute_subprocess`: the result goes to its own copy of stdout,
+#: and whatever the model prints (Python or C, e.g. a plugin's print or a solver's
+#: console output) to stderr, so that it cannot corrupt the pickle
+_CHILD = ("import os, pickle, sys\n"
+          "out = os.fdopen(os.dup(1), 'wb')\n"
+          "os.dup2(2, 1)\n"
+          "sys.stdout = sys.stderr\n"
+          "from sensfw.runs.spec import execute\n"
+          "result = execute(pickle.loads(sys.stdin.buffer.read()))\n"
+          "out.write(pickle.dumps(result))\n"
+          "out.flush()\n")
 
 
 def _execute_subprocess(spec: RunSpec) -> RunResult:

@@ -129,3 +129,23 @@ def test_a_run_whose_result_waits_behind_another_is_not_timed_out():
         pool.map([quick, waits], slow_save)
     assert got[quick.key()].ok
     assert got[waits.key()].ok, got[waits.key()].error
+
+
+def test_a_run_in_a_fresh_interpreter_survives_what_its_model_prints():
+    """Under Dask (daemonic workers) a run with a timeout executes in a fresh interpreter
+    that sent its result pickled on stdout: a model that printed anything (a plugin's
+    print, a solver's console output) corrupted it ('UnpicklingError: Memo value not
+    found'), the task failed and was retried for nothing. The model's output goes to
+    stderr now and the result arrives intact."""
+    from sensfw.runs.executor import _execute_subprocess
+    from sensfw.runs.spec import execute
+
+    faults = {"model": "two_dof", "chatter": "hello from the model"}
+    m = models.get(FAULT_INJECTION)(**faults)
+    spec = RunSpec.create(m, m.parameters().complete({}), EX, SolverSettings(timeout=120.0),
+                          {"name": FAULT_INJECTION, "options": faults})
+    res = _execute_subprocess(spec)
+    assert res.ok, res.error
+    here = execute(spec)
+    for ch, x in here.signals.channels.items():
+        assert (res.signals.channels[ch] == x).all()

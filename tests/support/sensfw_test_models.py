@@ -36,7 +36,9 @@ class FaultInjection(Model):
     Options map a fault to a condition ``{"parameter": name, "above": value}`` (or
     ``"below"``, or both: outside the interval): ``diverge``
     raises the model's divergence error, ``hang`` sleeps ``hang_seconds``, ``crash`` kills
-    the worker process (``os._exit``). ``slow`` adds ``slow_seconds`` to every run.
+    the worker process (``os._exit``). ``slow`` adds ``slow_seconds`` to every run;
+    ``chatter`` is printed to stdout by every run (through Python and through the file
+    descriptor, as a C library would).
     """
 
     name = "fault_injection"
@@ -45,14 +47,16 @@ class FaultInjection(Model):
     def __init__(self, model: str = "ishigami", model_options: dict | None = None,
                  diverge: dict | None = None, hang: dict | None = None,
                  crash: dict | None = None, hang_seconds: float = 3600.0,
-                 slow_seconds: float = 0.0):
+                 slow_seconds: float = 0.0, chatter: str = ""):
         self.inner = models.get(model)(**(model_options or {}))
         self.sensors, self.default_output = self.inner.sensors, self.inner.default_output
         self.faults = {"diverge": diverge, "hang": hang, "crash": crash}
         self.hang_seconds, self.slow_seconds = float(hang_seconds), float(slow_seconds)
         self._spec = {"model": model, "model_options": model_options or {},
                       **{k: v for k, v in self.faults.items() if v},
-                      "hang_seconds": hang_seconds, "slow_seconds": slow_seconds}
+                      "hang_seconds": hang_seconds, "slow_seconds": slow_seconds,
+                      **({"chatter": chatter} if chatter else {})}
+        self.chatter = chatter
 
     def parameters(self) -> ParameterSet:
         return self.inner.parameters()
@@ -72,6 +76,9 @@ class FaultInjection(Model):
 
     def simulate(self, params, excitation: Chirp, solver: SolverSettings | None = None):
         p = self.parameters().complete(params)
+        if self.chatter:
+            print(self.chatter, flush=True)
+            os.write(1, self.chatter.encode() + b"\n")
         if self.slow_seconds:
             time.sleep(self.slow_seconds)
         if self._hit("crash", p):
