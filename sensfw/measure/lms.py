@@ -125,7 +125,8 @@ def read_lms(path: str | Path | Sequence[str | Path], *, excitation: str | None 
         Naming the file and channel: missing file, not a MAT file, no LMS struct or no
         time signals (listing what is there), an unknown excitation or channel (listing the
         channels), sampling (increment or start) that differs between channels or files,
-        lengths that differ, NaN/inf values, a complex time signal.
+        lengths that differ, time signals of different Test.Lab runs (run names), NaN/inf
+        values, a complex time signal.
     """
     paths = [Path(p) for p in path] if isinstance(path, (list, tuple)) else [Path(path)]
     if not paths:
@@ -320,6 +321,13 @@ def _excitation(where: str, times: list[LMSFunction], spectral: list[LMSFunction
 
 
 def _check_consistent(exc: LMSFunction, resp: list[LMSFunction]) -> None:
+    run = str(exc.record.get("run") or "")
+    for f in resp:  # files of two runs of one rig have the same sampling and length
+        other = str(f.record.get("run") or "")
+        if run and other and other != run:
+            raise MeasurementError(f.file, f"recorded in the Test.Lab run {other!r}, the "
+                                           f"excitation {exc.name!r} in {run!r} ({exc.file}): "
+                                           f"files of different runs", f.name)
     for f in [exc, *resp]:
         if np.iscomplexobj(f.values):
             raise MeasurementError(f.file, "complex values in a time signal", f.name)

@@ -212,6 +212,44 @@ def test_lengths_that_differ(tmp_path):
         load(tmp_path / "nv.mat")
 
 
+def test_files_of_different_runs_are_refused(tmp_path):
+    """A folder's (or a list's) files from two Test.Lab runs of the rig have the same
+    sampling and length: the UNESP-BERT chirp's Time.mat with the random run's
+    TimeShaker.mat loaded as one measurement, a random voltage against a chirp response.
+    The run names (function_record's TL_export_properties_annotation.run_name) tell them
+    apart; files without one are read as before."""
+    chirp, rand = "Round1_Chirp0p05_70to110Hz_1", "Round1_Rand0p05_0to110Hz_1"
+    folder = tmp_path / "level_0p05"
+    folder.mkdir()
+    acc = np.column_stack([k * sweep() * 50 for k in (4.0, 2.0, 3.0, 1.0)])
+    savemat(folder / "Time.mat", {"Signal": lms_struct(
+        acc, 1 / FS, [f"Acc{i}:+X" for i in range(1, 5)], "g", ids=[3, 4, 5, 6], run=chirp)})
+    savemat(folder / "TimeShaker.mat", {"Time_Shaker__X": lms_struct(
+        sweep(), 1 / FS, ["Shaker:-X"], "V", ids=[8], run=rand)})
+    with pytest.raises(MeasurementError, match=r"Time\.mat, channel 'Acc1': recorded in the "
+                                               r"Test\.Lab run 'Round1_Chirp0p05_70to110Hz_1', "
+                                               r"the excitation 'Shaker' in 'Round1_Rand0p05_"
+                                               r"0to110Hz_1' \(.*TimeShaker\.mat\)"):
+        load(folder)
+    savemat(folder / "TimeShaker.mat", {"Time_Shaker__X": lms_struct(
+        sweep(), 1 / FS, ["Shaker:-X"], "V", ids=[8], run=chirp)})
+    m = load(folder)
+    np.testing.assert_array_equal(m.signals.channels["Acc2"], acc[:, 1])
+    savemat(folder / "TimeShaker.mat", {"Time_Shaker__X": lms_struct(
+        sweep(), 1 / FS, ["Shaker:-X"], "V", ids=[8])})  # no run name: not compared
+    np.testing.assert_array_equal(load(folder).signals.force, sweep())
+
+
+def test_bert_files_of_two_runs_are_refused(bert):
+    chirp = bert / "level_0p05"
+    rand = bert.parent / "random" / "level_0p05"
+    if not rand.is_dir():
+        pytest.skip(f"UNESP-BERT random records not found at {rand}")
+    with pytest.raises(MeasurementError, match=r"run 'Round1_Chirp0p05_70to110Hz_1', the "
+                                               r"excitation 'Shaker' in 'Round1_Rand0p05"):
+        read_lms([chirp / "Time.mat", rand / "TimeShaker.mat"])
+
+
 FIELDS = [("x_values", "increment"), ("x_values", "start_value"),
           ("x_values", "number_of_values"), ("y_values", "values"), ("y_values", "quantity"),
           ("function_record", "primary_channel"), ("function_record", "name"),
