@@ -122,18 +122,50 @@ def assemble(file: str, columns: dict[str, np.ndarray], unit_map: dict, fs_decla
     if len(dt) == 0 or np.any(dt <= 0):
         raise MeasurementError(file, "time is not strictly increasing", "time")
     step = float(np.median(dt))
+    notes, rounded = [], None
     if np.max(np.abs(dt - step)) > 1e-3 * step:
-        worst = int(np.argmax(np.abs(dt - step)))
-        raise MeasurementError(file, f"non-uniform sampling: step {dt[worst]:.6g} s at row "
-                                     f"{worst + 2} vs {step:.6g} s elsewhere", "time")
+        rounded = _rounded_grid(t)
+        if rounded is None:
+            worst = int(np.argmax(np.abs(dt - step)))
+            raise MeasurementError(file, f"non-uniform sampling: step {dt[worst]:.6g} s at "
+                                         f"row {worst + 2} vs {step:.6g} s elsewhere", "time")
+        step = rounded[0]
     fs = 1.0 / step
     fs_declared = _declared(file, "fs", fs_declared, "Hz")
     level = _declared(file, "level", level, target("force", unit_map.get("force")))
     if fs_declared is not None and abs(fs - float(fs_declared)) > 1e-3 * float(fs_declared):
         raise MeasurementError(file, f"sample rate from the time column is {fs:.6g} Hz but the "
                                      f"sidecar declares fs = {fs_declared} Hz", "time")
+    if rounded is not None:
+        if fs_declared is not None:
+            fs = float(fs_declared)
+        notes.append(f"the time column is written to {rounded[1]:g} s ({rounded[1] / step:.2%} "
+                     f"of a step): fs = {fs:.8g} Hz "
+                     + ("as the sidecar declares" if fs_declared is not None else
+                        "from its first and last time (declare fs in the sidecar to give it "
+                        "exactly)"))
     channels = {k: v for k, v in columns.items() if k not in ("time", "force")}
-    sig = Signals(t=t - t[0], force=columns["force"], channels=channels, fs=fs,
+    grid = np.arange(len(t)) / fs if rounded is not None else t - t[0]  # not the rounding
+    sig = Signals(t=grid, force=columns["force"], channels=channels, fs=fs,
                   units={k: target(k, unit_map.get(k)) for k in ("force", *channels)})
     return Measurement(file=file, signals=sig, units=dict(unit_map),
-                       level=None if level is None else float(level))
+                       level=None if level is None else float(level), notes=notes)
+
+
+def _rounded_grid(t: np.ndarray) -> tuple[float, float] | None:
+    """``(step, quantum)`` where the time column ``t`` is a uniform grid written to a fixed
+    number of decimals (``quantum``, e.g. 1e-6 s: a 12.8 kHz record's steps then read
+    7.8e-5 and 7.9e-5 s, 1.3 % apart): every time within ``quantum`` of the straight line
+    through the first and last, the quantum at most a tenth of the step; else None."""
+    n = len(t)
+    step = float(t[-1] - t[0]) / (n - 1)
+    quantum = None
+    for d in range(13):  # the coarsest decimal every time is written to
+        q = 10.0**-d
+        if np.all(np.abs(t / q - np.round(t / q)) <= 1e-6):
+            quantum = q
+            break
+    if quantum is None or not quantum <= 0.1 * step:
+        return None
+    line = t[0] + step * np.arange(n)
+    return (step, quantum) if np.max(np.abs(t - line)) <= quantum else None

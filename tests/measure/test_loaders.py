@@ -554,3 +554,37 @@ def test_a_sidecar_unit_for_a_column_the_file_lacks_is_named(tmp_path, good):
                                rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(m.signals.force, good.force * 1e3, rtol=1e-8, atol=1e-12)
     assert m.signals.units["force"] == "N"
+
+
+def test_a_time_column_written_to_fewer_decimals_is_read_as_the_uniform_grid(tmp_path):
+    """A 12.8 kHz record whose time column is written to six decimals (Excel's 0.000000,
+    LabVIEW's %.6f) has steps of 7.8e-5 and 7.9e-5 s: it was refused as 'non-uniform
+    sampling', with no way to load it (a sidecar's fs did not help). It is the uniform grid
+    rounded to 1e-6 s: fs comes from the first and last time, within 1e-6 s / span of the
+    true rate (or exactly the sidecar's fs), the values unchanged; a dropped sample in
+    such a column is still refused."""
+    fs, n = 12800.0, 4096
+    t = np.arange(n) / fs
+    force = np.sin(2 * np.pi * (60 * t + 400 * t**2))
+    a1 = 3.0 * np.cos(2 * np.pi * 90 * t)
+    f = tmp_path / "r.csv"
+
+    def write(times, force, a1):
+        rows = [f"{x:.6f},{y:.10g},{z:.10g}" for x, y, z in zip(times, force, a1, strict=True)]
+        f.write_text("time [s],force [N],a1 [m/s^2]\n" + "\n".join(rows) + "\n")
+
+    write(t, force, a1)
+    m = load(f)
+    span = t[-1] - t[0]
+    assert m.fs == pytest.approx(fs, rel=1e-6 / span)
+    assert len(m.signals.t) == n and m.signals.t[-1] == pytest.approx(span, abs=1e-6)
+    np.testing.assert_allclose(np.diff(m.signals.t), 1 / m.fs, rtol=1e-9)  # the grid
+    np.testing.assert_allclose(m.signals.channels["a1"], a1, rtol=1e-9, atol=1e-12)
+    assert any("written to 1e-06 s" in note for note in m.notes), m.notes
+    f.with_suffix(".toml").write_text("fs = 12800.0\n")
+    assert load(f).fs == 12800.0
+    f.with_suffix(".toml").unlink()
+    keep = np.arange(n) != 2000  # one sample lost
+    write(t[keep], force[keep], a1[keep])
+    with pytest.raises(MeasurementError, match=r"r\.csv, channel 'time': non-uniform"):
+        load(f)
