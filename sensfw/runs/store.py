@@ -42,6 +42,16 @@ def _atomic_write(path: Path, data: bytes) -> None:
         raise
 
 
+def _read_record(path: Path) -> dict | None:
+    """The JSON object in ``path``, or None (absent, not JSON, or JSON but not an object:
+    ``null``, a list, a number)."""
+    try:
+        meta = json.loads(path.read_text())
+    except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+        return None
+    return meta if isinstance(meta, dict) else None
+
+
 class RunStore:
     """Run entries in ``folder`` (created on first write). ``read_also``: other run stores'
     folders read (never written) where ``folder`` lacks a run, e.g. the runs of the
@@ -66,9 +76,8 @@ class RunStore:
 
     def _own_record(self, key: str) -> dict | None:
         meta_path, data_path = self._paths(key)
-        try:
-            meta = json.loads(meta_path.read_text())
-        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+        meta = _read_record(meta_path)
+        if meta is None:
             return None
         if meta.get("status") == "ok":
             try:
@@ -84,12 +93,9 @@ class RunStore:
     def damaged(self, key: str) -> bool:
         """Whether the store holds a record of ``key`` whose signal file is missing or fails
         its checksum (a disk full, a copy cut short): read as absent, named as damaged."""
-        meta_path, _ = self._paths(key)
-        try:
-            meta = json.loads(meta_path.read_text())
-        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
-            return False
-        return meta.get("status") == "ok" and self._own_record(key) is None
+        meta = _read_record(self._paths(key)[0])
+        return meta is not None and meta.get("status") == "ok" and \
+            self._own_record(key) is None
 
     def has(self, key: str, include_failed: bool = True) -> bool:
         meta = self.record(key)

@@ -102,10 +102,14 @@ def test_failed_runs_are_recorded_with_their_reason(tmp_path):
     assert store.load(s.key()).ok is False
 
 
-@pytest.mark.parametrize("bad", ["", "{}", '{"status": "weird"}'])
+@pytest.mark.parametrize("bad", ["", "{}", '{"status": "weird"}', "null", "[]", "3",
+                                 '"ok"'])
 def test_garbage_records_are_ignored(tmp_path, bad):
+    # JSON that is not an object (null, a list, a number) raised AttributeError out of
+    # record(), stopping the study on one damaged entry; it reads as absent like the rest
     (tmp_path / "abc.json").write_text(bad)
     assert RunStore(tmp_path).record("abc") is None
+    assert not RunStore(tmp_path).damaged("abc")
 
 
 def test_a_run_that_timed_out_is_run_again_under_a_longer_timeout(tmp_path):
