@@ -12,6 +12,7 @@ import json
 import math
 import multiprocessing as mp
 import os
+import pickle
 import queue
 import time
 from collections import deque
@@ -50,7 +51,6 @@ _CHILD = ("import os, pickle, sys\n"
 def _execute_subprocess(spec: RunSpec) -> RunResult:
     """:func:`execute` in a fresh interpreter (for daemonic processes such as Dask workers,
     which may not fork children), killed after ``spec.timeout`` seconds."""
-    import pickle
     import subprocess
     import sys
 
@@ -115,7 +115,41 @@ def _worker_main(tasks, results, wid: int) -> None:
             return
         if spec is None:
             return
-        results.put((wid, execute(spec)))
+        results.put((wid, _pickled(execute(spec))))
+
+
+def _pickled(result: RunResult) -> bytes:
+    """``result`` pickled here, in the worker: a queue pickles what it is given in a
+    thread of its own, which drops what it cannot pickle (a model's Signals holding a
+    function in ``meta``) with a traceback and no result, and the pool waited for it for
+    ever (or until the run's timeout, reported as one). Entries of ``signals.meta`` that
+    cannot be pickled are left out (the store keeps none of them: the run is stored as the
+    serial backend stores it, their names in ``meta["unpicklable_meta"]``); a result that
+    still cannot be pickled becomes a failure that says why."""
+    try:
+        return pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception as err:
+        first = err
+    meta = getattr(result.signals, "meta", None)
+    if isinstance(meta, dict):
+        dropped = []
+        for k, v in list(meta.items()):
+            try:
+                pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception:
+                dropped.append(str(k))
+                del meta[k]
+        if dropped:
+            meta["unpicklable_meta"] = dropped
+            try:
+                return pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception as err:
+                first = err
+    return pickle.dumps(RunResult(
+        result.key, False, wall=result.wall,
+        error=f"the run's result cannot be sent back from its worker process ("
+              f"{type(first).__name__}: {first}): a model's Signals must hold plain data "
+              "(arrays, numbers, strings)"))
 
 
 def _context():
@@ -209,7 +243,7 @@ class ProcessPool:
                 try:
                     item = self._results.get(timeout=poll)
                     while True:
-                        wid, res = item
+                        wid, res = item[0], pickle.loads(item[1])
                         if wid in busy and busy[wid][0].key() == res.key:
                             spec, _ = busy.pop(wid)
                             if res.wall:

@@ -149,3 +149,38 @@ def test_a_run_in_a_fresh_interpreter_survives_what_its_model_prints():
     here = execute(spec)
     for ch, x in here.signals.channels.items():
         assert (res.signals.channels[ch] == x).all()
+
+
+@pytest.mark.slow  # a worker pool
+def test_a_result_the_pool_cannot_pickle_whole_is_sent_without_what_it_cannot():
+    """A model whose signals hold a function (in ``meta``): the worker's queue thread could
+    not pickle the result, dropped it with a traceback on stderr, and the pool waited for
+    it until the run's timeout ('timeout: no result after 20 s'; without a timeout, for
+    ever), where the serial backend stored the run. The meta entry is left out (the store
+    keeps none such) and the run arrives, its signals those of the serial backend; a
+    result that cannot be pickled at all (its error, here) fails at once saying why."""
+    from sensfw.runs.executor import ProcessPool
+    from sensfw.runs.spec import RunResult, execute
+
+    bad_opts = {"model": "two_dof", "unpicklable": True}
+    bad_model = models.get(FAULT_INJECTION)(**bad_opts)
+    bad = RunSpec.create(bad_model, bad_model.parameters().complete({}), EX,
+                         SolverSettings(timeout=20.0),
+                         {"name": FAULT_INJECTION, "options": bad_opts})
+    got = {}
+    t0 = time.monotonic()
+    with ProcessPool(1) as pool:
+        pool.map([bad], lambda s, r: got.__setitem__(s.key(), r))
+    assert time.monotonic() - t0 < 20.0
+    res = got[bad.key()]
+    assert res.ok, res.error
+    assert res.signals.meta["unpicklable_meta"] == ["callback"]
+    serial = execute(bad)
+    for ch, x in serial.signals.channels.items():
+        assert (res.signals.channels[ch] == x).all()
+    import pickle
+
+    from sensfw.runs.executor import _pickled
+
+    lost = pickle.loads(_pickled(RunResult("k", False, error=lambda: None)))
+    assert not lost.ok and "cannot be sent back from its worker process" in lost.error

@@ -38,7 +38,8 @@ class FaultInjection(Model):
     raises the model's divergence error, ``hang`` sleeps ``hang_seconds``, ``crash`` kills
     the worker process (``os._exit``). ``slow`` adds ``slow_seconds`` to every run;
     ``chatter`` is printed to stdout by every run (through Python and through the file
-    descriptor, as a C library would).
+    descriptor, as a C library would); ``unpicklable`` puts a function into every run's
+    ``signals.meta``.
     """
 
     name = "fault_injection"
@@ -47,7 +48,7 @@ class FaultInjection(Model):
     def __init__(self, model: str = "ishigami", model_options: dict | None = None,
                  diverge: dict | None = None, hang: dict | None = None,
                  crash: dict | None = None, hang_seconds: float = 3600.0,
-                 slow_seconds: float = 0.0, chatter: str = ""):
+                 slow_seconds: float = 0.0, chatter: str = "", unpicklable: bool = False):
         self.inner = models.get(model)(**(model_options or {}))
         self.sensors, self.default_output = self.inner.sensors, self.inner.default_output
         self.faults = {"diverge": diverge, "hang": hang, "crash": crash}
@@ -55,8 +56,9 @@ class FaultInjection(Model):
         self._spec = {"model": model, "model_options": model_options or {},
                       **{k: v for k, v in self.faults.items() if v},
                       "hang_seconds": hang_seconds, "slow_seconds": slow_seconds,
-                      **({"chatter": chatter} if chatter else {})}
-        self.chatter = chatter
+                      **({"chatter": chatter} if chatter else {}),
+                      **({"unpicklable": True} if unpicklable else {})}
+        self.chatter, self.unpicklable = chatter, unpicklable
 
     def parameters(self) -> ParameterSet:
         return self.inner.parameters()
@@ -87,7 +89,10 @@ class FaultInjection(Model):
             time.sleep(self.hang_seconds)
         if self._hit("diverge", p):
             raise DivergenceError(self.name, "diverged (injected fault)", p)
-        return self.inner.simulate(p, excitation, solver)
+        signals = self.inner.simulate(p, excitation, solver)
+        if self.unpicklable:
+            signals.meta["callback"] = lambda: None
+        return signals
 
 
 class NoisyQuadratic(Model):
