@@ -120,36 +120,18 @@ def _worker_main(tasks, results, wid: int) -> None:
 
 def _pickled(result: RunResult) -> bytes:
     """``result`` pickled here, in the worker: a queue pickles what it is given in a
-    thread of its own, which drops what it cannot pickle (a model's Signals holding a
-    function in ``meta``) with a traceback and no result, and the pool waited for it for
-    ever (or until the run's timeout, reported as one). Entries of ``signals.meta`` that
-    cannot be pickled are left out (the store keeps none of them: the run is stored as the
-    serial backend stores it, their names in ``meta["unpicklable_meta"]``); a result that
-    still cannot be pickled becomes a failure that says why."""
+    thread of its own, which drops what it cannot pickle with a traceback and no result,
+    and the pool waited for it for ever (or until the run's timeout, reported as one).
+    :func:`~sensfw.runs.spec.execute` leaves out the ``meta`` entries that cannot be
+    pickled; a result that still cannot be becomes a failure that says why."""
     try:
         return pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
     except Exception as err:
-        first = err
-    meta = getattr(result.signals, "meta", None)
-    if isinstance(meta, dict):
-        dropped = []
-        for k, v in list(meta.items()):
-            try:
-                pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL)
-            except Exception:
-                dropped.append(str(k))
-                del meta[k]
-        if dropped:
-            meta["unpicklable_meta"] = dropped
-            try:
-                return pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
-            except Exception as err:
-                first = err
-    return pickle.dumps(RunResult(
-        result.key, False, wall=result.wall,
-        error=f"the run's result cannot be sent back from its worker process ("
-              f"{type(first).__name__}: {first}): a model's Signals must hold plain data "
-              "(arrays, numbers, strings)"))
+        return pickle.dumps(RunResult(
+            result.key, False, wall=result.wall,
+            error=f"the run's result cannot be sent back from its worker process ("
+                  f"{type(err).__name__}: {err}): a model's Signals must hold plain data "
+                  "(arrays, numbers, strings)"))
 
 
 def _context():

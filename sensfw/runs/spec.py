@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import pickle
 import time
 import traceback
 from collections.abc import Mapping
@@ -134,6 +135,22 @@ def simulate_with_halving(model: Model, params: dict, excitation: Excitation,
             return signals
 
 
+def _picklable_meta(signals: Signals) -> None:
+    """Leave out the entries of ``signals.meta`` that cannot be pickled (a function, a
+    solver object a model kept there), naming them in ``meta["unpicklable_meta"]``: a
+    result goes back from a worker process pickled, and one that cannot be was lost
+    there, while the serial backend stored the run (the store keeps no such entry)."""
+    dropped = []
+    for k, v in list(signals.meta.items()):
+        try:
+            pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception:
+            dropped.append(str(k))
+            del signals.meta[k]
+    if dropped:
+        signals.meta["unpicklable_meta"] = dropped
+
+
 def execute(spec: RunSpec) -> RunResult:
     """Run one simulation (in a worker). Never raises: a failure becomes a failed result."""
     t0 = time.perf_counter()
@@ -144,6 +161,7 @@ def execute(spec: RunSpec) -> RunResult:
         solver = SolverSettings(**{k: v for k, v in spec.solver.items()
                                    if k in SolverSettings.__dataclass_fields__})
         signals = simulate_with_halving(model, dict(spec.params), exc, solver)
+        _picklable_meta(signals)
         return RunResult(key, True, signals=signals, wall=time.perf_counter() - t0)
     except SimulationError as err:
         return RunResult(key, False, error=str(err), wall=time.perf_counter() - t0)

@@ -156,9 +156,10 @@ def test_a_result_the_pool_cannot_pickle_whole_is_sent_without_what_it_cannot():
     """A model whose signals hold a function (in ``meta``): the worker's queue thread could
     not pickle the result, dropped it with a traceback on stderr, and the pool waited for
     it until the run's timeout ('timeout: no result after 20 s'; without a timeout, for
-    ever), where the serial backend stored the run. The meta entry is left out (the store
-    keeps none such) and the run arrives, its signals those of the serial backend; a
-    result that cannot be pickled at all (its error, here) fails at once saying why."""
+    ever), where the serial backend stored the run. The meta entry is left out by every
+    backend (the store keeps none such) and the run arrives, its signals those of the
+    serial backend; a result that cannot be pickled at all (its error, here) fails at once
+    saying why."""
     from sensfw.runs.executor import ProcessPool
     from sensfw.runs.spec import RunResult, execute
 
@@ -176,6 +177,7 @@ def test_a_result_the_pool_cannot_pickle_whole_is_sent_without_what_it_cannot():
     assert res.ok, res.error
     assert res.signals.meta["unpicklable_meta"] == ["callback"]
     serial = execute(bad)
+    assert serial.signals.meta["unpicklable_meta"] == ["callback"]
     for ch, x in serial.signals.channels.items():
         assert (res.signals.channels[ch] == x).all()
     import pickle
