@@ -247,6 +247,17 @@ def align_to_ideal(meas: Measurement, excitation: Excitation, est: SweepEstimate
                           f"+- {limit * 1e3:g} ms, the sweep's estimated start): the alignment "
                           "is not to be trusted")
     n = excitation.n_samples
+    missing = n - (len(sig.force) - shift)
+    if missing > max(2, 0.1 * (excitation.n_samples - excitation.sweep_end * sig.fs)):
+        # the study's record (sweep + tail) reaches beyond the measured one: zeros in place
+        # of the ring-down the model computes (1.4 dB at the sweep's end of the 2-DOF
+        # model's quick chirp for a 0.05 s tail cut off)
+        meas.warnings.append(f"the record ends {missing / sig.fs:.4g} s before the study's "
+                             f"({excitation.n_samples / excitation.fs:.4g} s: sweep and tail) "
+                             "and is padded with zeros: its ring-down after the sweep is "
+                             "missing where the model's is not (the FRF near the sweep's end "
+                             "is biased); record longer, or shorten the study's tail")
+        meas.notes.append(meas.warnings[-1])
 
     def cut(x):
         x = x[shift:] if shift >= 0 else np.concatenate([np.zeros(-shift), x])
