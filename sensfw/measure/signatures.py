@@ -229,6 +229,17 @@ def twin_scatter(peak: dict | None, twins: Sequence[Sequence[dict]], method: str
     return float(100 * math.sqrt(2) * np.std(logs, ddof=1))
 
 
+def _twin_peak(peak: dict | None, twins: Sequence[Sequence[dict]]) -> float | None:
+    """The frequency of the nearest peak, within :data:`PAIR_TOL`, that one of the model's
+    twin runs has at a measured ``peak`` the model itself lacks (``None`` if none has): the
+    model's own realisations can show it, so it is no evidence of a missing mode."""
+    if peak is None:
+        return None
+    near = [q["frequency"] for peaks in twins for q in peaks
+            if abs(math.log(q["frequency"] / peak["frequency"])) <= PAIR_TOL]
+    return min(near, key=lambda f: abs(math.log(f / peak["frequency"])), default=None)
+
+
 def amplitude_table(levels: Sequence) -> dict:
     """The amplitude-dependence table of model/measurement comparisons at several levels.
 
@@ -277,7 +288,8 @@ def amplitude_table(levels: Sequence) -> dict:
                 "line_hz": line[lv],
                 "damping_ratio": za / zb if both and za and zb else None,
                 "method": method if (a or b) else None,
-                "model_scatter_pct": twin_scatter(b, pt[lv], method)})
+                "model_scatter_pct": twin_scatter(b, pt[lv], method),
+                "twin_peak_hz": _twin_peak(a, pt[lv]) if b is None else None})
         kind = "paired" if i is not None and j is not None else \
             "measured only" if i is not None else "model only"
         ref = next(r["measured_hz"] or r["model_hz"] for r in per
@@ -480,12 +492,17 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
                        "sigma": (h["dc_measured"] - h["dc_model"]) / se})
     if even or dc:
         found["even_harmonics"] = {"harmonics": even, "dc": dc}
+    # levels where a twin lost one of the model's peaks: the model's peaks there are not
+    # determined by its drive, so a measured peak it lacks says nothing
+    lost = {x["level"] for r in table["resonances"] for x in r["levels"]
+            if x.get("model_scatter_pct") == math.inf}
     new = []
     for r in table["resonances"]:
         if r["kind"] != "measured only":
             continue
         rows = [x for x in r["levels"] if x["measured_hz"] is not None
-                and x["measured_prominence_db"] >= th["new_peak_prominence_db"]]
+                and x["measured_prominence_db"] >= th["new_peak_prominence_db"]
+                and x.get("twin_peak_hz") is None and x["level"] not in lost]
         if rows:
             new.append({"resonance": r["id"], "frequency_hz": r["frequency_hz"],
                         "levels": [x["level"] for x in rows],

@@ -217,6 +217,28 @@ def test_new_peak_needs_a_prominent_measured_resonance():
     assert classes(with_extra(8.0)) == {}
 
 
+def test_a_new_peak_the_model_s_own_twins_show_or_at_a_level_they_do_not_determine_is_none():
+    """A measured 2100 Hz peak (15 dB) the model lacks is a new peak where the model's
+    twins agree with it; not where a twin has a peak within the pairing tolerance there
+    (2150 Hz: the model's own realisations can show it), nor at a level where a twin lost
+    one of the model's peaks (its peaks there are not determined by its drive: the quick
+    model's 0.5 N random record, ``test_a_model_its_random_drive_...`` below)."""
+    def with_extra(twins_at_top):
+        out = levels_of([(1500.0, 0.005)] * 3, [(1500.0, 0.005)] * 3)
+        for lv in out:
+            lv.peaks_measured.append(peak(2100.0, prominence=15.0))
+            lv.peaks_twins = twins_at_top if lv.level == LEVELS[-1] else \
+                [[peak(1500.0)], [peak(1500.0)]]
+        return out
+
+    found = classes(with_extra([[peak(1500.0)], [peak(1500.0)]]))
+    assert found["new_peak"]["resonances"][0]["levels"] == list(LEVELS)
+    for twins in ([[peak(1500.0), peak(2150.0)], [peak(1500.0)]],  # a twin shows it
+                  [[peak(1500.0)], [peak(1900.0)]]):  # a twin lost the 1500 Hz peak
+        found = classes(with_extra(twins))
+        assert found["new_peak"]["resonances"][0]["levels"] == list(LEVELS[:-1])
+
+
 def test_even_harmonics_and_dc():
     same = [(1500.0, 0.005)] * 3
 
@@ -590,8 +612,10 @@ def test_a_model_its_random_drive_does_not_determine_names_nothing_against_itsel
     0.5 N the clutch's stick-slip makes the response diverge from a round-off change of the
     drive within a tenth of a second, so the model driven by the noisy record is another
     realisation of itself: its peaks fall apart (a "hardening" of the 1.5 kHz mode was read
-    from them without the twins). With two twins the model's own scatter is stated and no
-    class holds; at 0.05 N the model is determined by its drive (scatter below 0.01 dB).
+    from them without the twins on one machine, a "new peak" on another, whose round-off
+    differs). With two twins the model's own scatter is stated and no class holds (a peak
+    the model lacks at a level where a twin lost one of its peaks is no new peak); at 0.05 N
+    the model is determined by its drive (scatter below 0.01 dB).
     Measured here: 3e-7 dB at 0.05 N; 3.67 dB at 0.5 N, where the error is 3.67 dB for 1.97
     dB of noise alone, an excess of 3.10 dB (the ratio, 1.18, is one draw of a ratio of
     scatters: the bounds allow a factor 2 either way)."""
@@ -603,7 +627,12 @@ def test_a_model_its_random_drive_does_not_determine_names_nothing_against_itsel
         meas.append(prepare(Measurement(f"random@{lv:g}", sig, level=info["amplitude"]),
                             study))
     bare = compare_measurements(study, meas, runner)
-    assert "hardening" in bare.amplitude["classes"]  # the false signature, without twins
+    # without twins the 0.5 N error is the model's divergence from itself, beyond the noise
+    # (which false class it then reads depends on the machine's round-off: "hardening" on
+    # one, a "new_peak" on another)
+    b_high = bare.levels[1]
+    assert b_high.error_scatter_db is None
+    assert b_high.error_db > b_high.error_noise_db + 0.5  # 3.17 for 1.89 dB; 3.67 for 1.97
     cmp = compare_measurements(study, meas, runner, twins=2)
     low, high = cmp.levels
     assert low.error_scatter_db < 0.01
