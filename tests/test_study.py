@@ -527,3 +527,45 @@ def test_help_keeps_the_place_of_an_effect(command, text):
                           capture_output=True, text=True, timeout=120,
                           env={**os.environ, "COLUMNS": "400"})
     assert text in proc.stdout
+
+
+def test_a_value_of_the_wrong_type_does_not_hide_the_other_problems():
+    """Three mistakes, three problems: a seed written "7" (pydantic refuses it) hid the
+    frequency in kg and the misspelt parameter (1 problem reported); a string where
+    ``halvings`` wants an integer hid an unknown design and a scorer's bad option."""
+    data = copy.deepcopy(QUICK)
+    data["study"]["seed"] = "7"
+    data["excitation"]["f0"] = "50 kg"
+    data["parameters"] = {"slide_stifness": {"max": "1 N/mm"}}
+    data["solver"]["halvings"] = "two"
+    data["stages"][0]["design"] = "oatt"
+    data["stages"][1]["scorers"][0]["order"] = "x"
+    with pytest.raises(StudyError) as info:
+        Study.from_dict(data, "x.toml")
+    got = info.value.problems
+    assert [path for path, _ in got] == [
+        "study.seed", "solver.halvings", "excitation.f0", "parameters.slide_stifness",
+        "stages[0].design", "stages[1].scorers[0].order"], got
+    assert "x.toml (6 problem(s))" in str(info.value)
+    assert "cannot convert '50 kg' to Hz" in dict(got)["excitation.f0"]
+    # a value dropped to be checked again is not reported twice, nor what follows from it
+    data = copy.deepcopy(QUICK)
+    data["stages"][0]["select"]["threshold"] = 2
+    data["stages"][0]["bogus"] = 1
+    data["parameters"] = {"slide_stiffness": {"min": "5 kg"}}
+    assert list(problems(data)) == ["stages[0].select.threshold", "stages[0].bogus",
+                                    "parameters.slide_stiffness.min"]
+
+
+def test_a_list_where_a_quantity_belongs_is_one_problem_at_its_key():
+    """``f1 = [1]`` was three problems at ``excitation.f1.str``, ``.float`` and ``.int``
+    (pydantic's union members, no keys of the file) and hid the unknown output channel."""
+    data = copy.deepcopy(QUICK)
+    data["excitation"]["f1"] = [1]
+    data["model"]["output"] = "nope"
+    assert problems(data) == {
+        "excitation.f1": "expected a number or a quantity with its unit (\"1e6 N/mm\"), "
+                         "got [1]",
+        "model.output": "unknown channel 'nope'; the model has crank_axial, crank_radial, "
+                        "drive_axial, drive_radial"}
+

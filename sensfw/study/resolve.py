@@ -34,6 +34,29 @@ def _without(data: Any, locs: list[tuple]) -> Any:
     return out
 
 
+def _real_loc(data: Any, error: Mapping[str, Any]) -> tuple:
+    """The location of a pydantic ``error`` up to the last key the data has: without the
+    member tags of a union (``f1.str``, ``f1.float``: a list where a quantity belongs is one
+    problem at ``f1``); a missing key's location as it is."""
+    loc = tuple(error["loc"])
+    if error["type"] in ("missing", "extra_forbidden"):
+        return loc
+    node, out = data, []
+    for part in loc:
+        found = (part in node) if isinstance(node, Mapping) else \
+            isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node)
+        if not found:
+            break
+        node = node[part]
+        out.append(part)
+    return tuple(out)
+
+
+def _within(path: str, other: str) -> bool:
+    """Whether the dotted ``path`` is ``other`` or inside it."""
+    return path == other or path.startswith((other + ".", other + "["))
+
+
 def _section(loc: tuple) -> type[BaseModel] | None:
     """The schema model of the table that holds the key at ``loc`` (None: a free-form table)."""
     node: Any = StudyFile
@@ -124,20 +147,30 @@ class Study:
         try:
             spec = StudyFile.model_validate(data)
         except ValidationError as err:
+            errors = [(_real_loc(data, e), e) for e in err.errors()]
             # a validator's own message without pydantic's "Value error, " in front
-            problems = [(_path(e["loc"]), _unknown_key(e["loc"])
-                         if e["type"] == "extra_forbidden"
-                         else e["msg"].removeprefix("Value error, "))
-                        for e in err.errors()]
-            # unknown keys alone should not hide the other problems: drop them and check
-            # the rest, so that everything is reported at once
-            if all(e["type"] == "extra_forbidden" for e in err.errors()):
-                cleaned = _without(data, [e["loc"] for e in err.errors()])
+            problems = [(_path(loc), _unknown_key(loc) if e["type"] == "extra_forbidden"
+                         else e["msg"].removeprefix("Value error, ")) for loc, e in errors]
+            # one bad value should not hide the other problems: without the values pydantic
+            # refused (each table's default takes its place) the file is checked again and
+            # what that finds elsewhere is reported too; not where a required value or a
+            # list's item is bad (dropping it would leave the file invalid, or move the
+            # items after it to other indices)
+            locs = [loc for loc, e in errors]
+            if all(e["type"] != "missing" and loc and not isinstance(loc[-1], int)
+                   for loc, e in errors):
                 try:
-                    cls(StudyFile.model_validate(cleaned), source)
-                except StudyError as more:
-                    problems += more.problems
-            raise StudyError(problems, source) from None
+                    cleaned = StudyFile.model_validate(_without(data, locs))
+                except ValidationError:
+                    cleaned = None
+                if cleaned is not None:
+                    told = [_path(loc) for loc in locs]
+                    try:
+                        cls(cleaned, source)
+                    except StudyError as more:
+                        problems += [(path, msg) for path, msg in more.problems
+                                     if not any(_within(path, t) for t in told)]
+            raise StudyError(list(dict.fromkeys(problems)), source) from None
         return cls(spec, source)
 
     @classmethod

@@ -12,9 +12,10 @@ from ..models.stepsize import DEFAULT_TOLERANCE
 
 
 def _no_bool(value: Any) -> Any:
-    if isinstance(value, bool):
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        got = str(value).lower() if isinstance(value, bool) else repr(value)
         raise ValueError(f"expected a number or a quantity with its unit (\"1e6 N/mm\"), "
-                         f"got {str(value).lower()}")
+                         f"got {got}")
     return value
 
 
