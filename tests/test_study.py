@@ -569,3 +569,13 @@ def test_a_list_where_a_quantity_belongs_is_one_problem_at_its_key():
         "model.output": "unknown channel 'nope'; the model has crank_axial, crank_radial, "
                         "drive_axial, drive_radial"}
 
+
+def test_a_bad_group_does_not_hide_the_stages_problems():
+    """An unknown group member stopped the checks: the unknown design went unreported."""
+    data = copy.deepcopy(QUICK)
+    data["groups"] = {"g": ["slide_stiffness", "nope"]}
+    data["stages"][0]["design"] = "oatt"
+    got = problems(data)
+    assert list(got) == ["groups.g", "stages[0].design"], got
+    assert got["groups.g"] == "unknown parameter 'nope'"
+    assert got["stages[0].design"].startswith("unknown design 'oatt'; available:")

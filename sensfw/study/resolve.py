@@ -127,15 +127,18 @@ class Study:
         self.solver = self._resolve_solver(problems)
         before = len(problems)
         self.groups = self._resolve_groups(problems)
-        if len(problems) > before:  # every design variable is made of the groups
-            raise StudyError(problems, source)
+        # every design variable is made of the groups: with a bad group the stages are
+        # checked without their variables (designs, scorers, surrogates, references)
+        grouped = len(problems) == before
         found, self.stage_bounds = check_stages(
-            spec.stages, parameters=self.parameters, groups=self.groups,
-            excitation=self.excitation,
+            spec.stages, parameters=self.parameters if grouped else None,
+            groups=self.groups if grouped else {}, excitation=self.excitation,
             sensors=None if self.model is None else self.model.sensors,
             accepted=None if self.model is None else self.model.parameters(),
             model=self.spec.model.name)
         problems += found
+        if not grouped:
+            raise StudyError(problems, source)
         self.calibration_bounds = self._check_calibration(problems)
         self._check_comparison(problems)
         if problems:
