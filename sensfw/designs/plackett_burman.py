@@ -1,5 +1,8 @@
 """Plackett-Burman screening designs: two levels, the fewest runs that estimate every main
-effect (a multiple of four above the number of variables; pyDOE3's ``pbdesign``).
+effect (a multiple of four above the number of variables; pyDOE3's ``pbdesign``, and where
+it has no Hadamard matrix of that order, 28, 36 and 44 runs among them, Paley's
+constructions from the conference matrices of :mod:`.definitive_screening`: Paley, R. E.
+A. C. (1933), On orthogonal matrices, J. Math. Phys. 12, 311-320).
 
 Plackett, R. L., Burman, J. P. (1946), The design of optimum multifactorial experiments,
 Biometrika 33(4), 305-325. Where the run count is a power of two the design is a regular
@@ -23,7 +26,29 @@ from ..options import Int, PluginOptions
 from ..params import DesignSpace
 from ..plugins import designs
 from ._coded import to_table, two_level_effects
-from .base import Design, ScreeningResult, responses
+from .base import Design, DesignError, ScreeningResult, responses
+from .definitive_screening import _is_prime, conference_matrix
+
+
+def hadamard(n: int) -> np.ndarray | None:
+    """A Hadamard matrix of order ``n`` (``H^T H = n I``) by Paley's constructions (I: ``I +
+    C`` with ``C`` the skew conference matrix of order ``n = q + 1``, q = 3 mod 4; II:
+    ``[[C + I, C - I], [C - I, -C - I]]`` with ``C`` the symmetric one of order ``n / 2 = q +
+    1``, q = 1 mod 4; q prime) or Sylvester's doubling of one of half the order; None where
+    none of them gives one (52, 92, 100, ...)."""
+    if n in (1, 2):
+        return np.array([[1]]) if n == 1 else np.array([[1, 1], [1, -1]])
+    if n % 4:
+        return None
+    q = n - 1
+    if _is_prime(q) and q % 4 == 3:
+        return np.eye(n, dtype=int) + conference_matrix(n)
+    q = n // 2 - 1
+    if _is_prime(q) and q % 4 == 1:
+        C, eye = conference_matrix(q + 1), np.eye(q + 1, dtype=int)
+        return np.block([[C + eye, C - eye], [C - eye, -C - eye]])
+    half = hadamard(n // 2)
+    return None if half is None else np.block([[half, half], [half, -half]])
 
 
 def partial_aliasing(X: np.ndarray) -> float:
@@ -79,7 +104,17 @@ class PlackettBurman(Design):
     def matrix(self, k: int) -> np.ndarray:
         from pyDOE3 import pbdesign
 
-        return np.asarray(pbdesign(k), float)
+        n = 4 * (k // 4 + 1)
+        try:
+            return np.asarray(pbdesign(k), float)
+        except AssertionError:  # pyDOE3 has no Hadamard matrix of order n (28, 36, 44, ...)
+            H = hadamard(n)
+        if H is None:
+            raise DesignError(f"design {self.name!r}: no Hadamard matrix of order {n} (the "
+                              f"{n} runs of {k} variables) is built here; use "
+                              "fractional_factorial or definitive_screening")
+        H = H * H[:, :1]  # first column all +1: every other column is balanced
+        return np.asarray(H[:, 1:k + 1], float)
 
     def n_runs(self, space: DesignSpace) -> int:
         return len(self.matrix(len(space))) + self.options["center"]

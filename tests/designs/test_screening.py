@@ -160,6 +160,28 @@ def test_plackett_burman_estimates_main_effects_with_partial_aliasing(k, runs, a
     assert res.ranking[:2] == ["x1", "x5"] and f"{aliasing:.2f}" in res.notes[0]
 
 
+
+@pytest.mark.parametrize(("k", "runs"), [(24, 28), (27, 28), (33, 36), (40, 44)])
+def test_plackett_burman_has_its_run_count_where_pydoe3_has_no_matrix(k, runs):
+    """pyDOE3's pbdesign builds no Hadamard matrix of order 28, 36 or 44: 24 variables (the
+    paper's model has 10-30) failed with its bare AssertionError 'n must be a multiple of
+    4'. The design is the multiple of 4 above k (Plackett & Burman 1946), orthogonal and
+    balanced; where no matrix is built (order 52) the error names the design."""
+    space = unit_space(k)
+    pb = make_design("plackett_burman")
+    table = pb.generate(space)
+    X = table.to_numpy()
+    assert len(table) == runs == pb.n_runs(space)
+    assert set(np.unique(X)) == {-1.0, 1.0}
+    np.testing.assert_array_equal(X.T @ X, runs * np.eye(k))
+    np.testing.assert_array_equal(X.sum(axis=0), np.zeros(k))
+    res = pb.analyze(space, table, 2 * X[:, 0] - X[:, 4] + 0.5)
+    assert res.table.loc["x1", "effect"] == pytest.approx(4.0)
+    assert res.table.loc["x5", "effect"] == pytest.approx(-2.0)
+    with pytest.raises(DesignError, match="design 'plackett_burman': no Hadamard matrix of "
+                                          "order 52"):
+        pb.n_runs(unit_space(48))
+
 def test_resolution_is_checked_not_trusted():
     # pyDOE3 issue #8: fracfact_by_res(8, 5) returns a resolution IV design
     assert resolution(pyDOE3.fracfact_by_res(8, 5)) == 4
