@@ -13,7 +13,7 @@ from ..errors import AnalysisError
 from ..options import Bool, Float, Int, PluginOptions
 from ..plugins import designs
 from ._coded import to_table
-from .base import Design, ScreeningResult, responses
+from .base import ROUND_OFF, Design, ScreeningResult, responses
 
 
 def _power_of_two(n: int) -> int:
@@ -91,6 +91,12 @@ class Sobol(Design):
         tab = pd.DataFrame({"variable": space.names, "S1": res["S1"], "S1_conf":
                             res["S1_conf"], "ST": res["ST"], "ST_conf": res["ST_conf"]}) \
             .set_index("variable")
-        imp = tab["ST"].clip(lower=0)
+        imp = tab["ST"].clip(lower=0).fillna(0.0)
+        notes = []
+        spread, scale = float(np.ptp(y)), float(np.max(np.abs(y)))
+        if spread <= ROUND_OFF * scale:  # indices are ratios of variances: of round-off here
+            notes.append(f"no variable changes the response beyond round-off (responses "
+                         f"spread over {spread:.3g}, up to {scale:.3g}): every importance is 0")
+            imp = imp * 0.0
         return ScreeningResult(importance=imp / imp.max() if imp.max() > 0 else imp,
-                               table=tab)
+                               table=tab, notes=notes)

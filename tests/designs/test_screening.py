@@ -239,12 +239,14 @@ def test_sobol_design_recovers_ishigami_indices():
 @pytest.mark.parametrize("name,options", [("plackett_burman", {}), ("oat", {}),
                                           ("full_factorial", {"levels": 3}),
                                           ("definitive_screening", {}),
-                                          ("morris", {"trajectories": 4})])
+                                          ("morris", {"trajectories": 4}),
+                                          ("sobol", {"N": 16})])
 def test_an_effect_of_round_off_is_no_effect(name, options):
     """A response that no variable moves beyond round-off (100 + 1e-14 x1, in double
     precision 100 +- a few ulp): every importance is 0 with a note, not the largest
     round-off normalised to 100 % (a one-variable Plackett-Burman design made 2e-16
-    100 %). The same response with a real effect of x1 keeps it at 1."""
+    100 %; Sobol' indices, ratios of variances, made x1's ulp-sized variance 100 %). The
+    same response with a real effect of x1 keeps it at 1."""
     space = unit_space(3)
     design = make_design(name, **options)
     table = design.generate(space, seed=1)
