@@ -49,6 +49,10 @@ def test_units_are_converted_and_checked():
     assert to_unit("0.234 N*s/m", "N*s/mm") == pytest.approx(2.34e-4)
     assert to_unit("5 kHz", "Hz") == 5000
     assert to_unit(3, "mm") == 3.0
+    # a bare number in a string means the unit too ("cannot convert '1e6' to N/mm" before)
+    assert to_unit("1e6", "N/mm") == to_unit(1e6, "N/mm") == 1e6
+    assert to_unit(" 7 ", "Hz") == 7.0 and to_unit("0.5", "") == 0.5
+    assert to_unit("50 %", "") == 0.5
     with pytest.raises(ValueError, match="cannot convert '3 kg' to N/mm"):
         to_unit("3 kg", "N/mm")
 

@@ -25,6 +25,10 @@ def to_unit(value: Quantity, unit: str) -> float:
     import pint
 
     try:
+        try:  # "1e6": a bare number, in ``unit`` (pint reads it as dimensionless)
+            return float(value.strip())
+        except ValueError:
+            pass
         q = units().Quantity(value.strip())
         if isinstance(q, (int, float)):
             return float(q)
