@@ -412,7 +412,8 @@ def classes(levels: Sequence, thresholds: dict | None = None, table: dict | None
     Where the levels carry the model's twin runs, every frequency threshold grows by
     :data:`TWIN_SIGMAS` standard deviations of the model's own scatter of that shift
     (``model_scatter_pct``; of a trend, ``sqrt(2)`` times it): a shift the model does not
-    determine is no evidence.
+    determine is no evidence. Nor is a new peak that a twin shows (``twin_peak_hz``), or one
+    at a level where a twin lost one of the model's peaks.
 
     Several classes may hold at once. Returns ``{class: evidence}``. ``table``: the
     :func:`amplitude_table` of ``levels`` if already built.
