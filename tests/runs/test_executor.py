@@ -169,12 +169,10 @@ def test_a_result_the_pool_cannot_pickle_whole_is_sent_without_what_it_cannot():
                          SolverSettings(timeout=20.0),
                          {"name": FAULT_INJECTION, "options": bad_opts})
     got = {}
-    t0 = time.monotonic()
     with ProcessPool(1) as pool:
         pool.map([bad], lambda s, r: got.__setitem__(s.key(), r))
-    assert time.monotonic() - t0 < 20.0
     res = got[bad.key()]
-    assert res.ok, res.error
+    assert res.ok, res.error  # a lost result ends as 'timeout: no result after 20 s'
     assert res.signals.meta["unpicklable_meta"] == ["callback"]
     serial = execute(bad)
     assert serial.signals.meta["unpicklable_meta"] == ["callback"]
