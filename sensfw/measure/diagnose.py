@@ -38,7 +38,9 @@ places never calibrated a run each, ``6 k + 6`` points for at most ``final`` of 
 the runner-up's further refinement (``6 k + 6`` points, where it stopped on its budget)
 and the named hypotheses' (at most ``POLISH_ROUNDS`` rounds of ``4 (k + 1)`` points each)
 and the screen's first looks from the nominal values (one run per candidate, where H0's optimum
-moved more than ``from_nominal`` from them), so a diagnosis ends within about
+moved more than ``from_nominal`` from them) and, where the race's best calibration on its
+level misses the noise, the next finalists' calibrations there (the leader's points each,
+``criteria["beyond_budget"]``), so a diagnosis ends within about
 twice its budget (the suite's preload case: 306 simulations for 200).
 """
 
@@ -173,6 +175,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
     names, source, space, res = calibration_residuals(study, measurements, runner, log)
     n_levels = res.n_levels
     budget = default_budget(n_levels) if budget is None else int(budget)
+    asked, beyond = budget, 0
     q = workers_of(runner)
     opts = {"q": q, "local": local} if global_phase else \
         {"q": q, "local": local, **LOCAL_ONLY}
@@ -226,6 +229,11 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
         ranked = screen(res, h0, hyps, h0_cmp, level, on_level, max(room, len(hyps)),
                         margin=min_delta_bic, first_only=h0_fits,
                         from_nominal=from_nominal, log=log)
+        beyond = sum(h.screen.get("beyond_budget", 0) for h in ranked)
+        if beyond:  # what the finalists need at every level stays theirs
+            log(f"the race went {beyond} simulations beyond its share: the budget grows by "
+                "as much")
+            budget += beyond
         sl = res.level_slices()[level]
         chi0 = float(np.sum(h0.fit.best.w[sl] ** 2))
         able = [h for h in ranked if h.screen.get("calibrated", math.inf) +
@@ -304,7 +312,8 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
         best=res.output_comparisons(best_all),
         errors={"nominal": res.rms_db(nominal_cmp), "parameters": res.rms_db(h0_all),
                 "best": res.rms_db(best_all) if best_all else None},
-        criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3, "budget": budget,
+        criteria={"min_delta_bic": min_delta_bic, "alpha": 1e-3, "budget": asked,
+                  "beyond_budget": beyond,
                   "records": res.records(), "kind_weights": res.kind_weights,
                   "refine": local, "global_phase": global_phase, "model_db": discrepancy.MODEL_DB,
                   "thd_db": discrepancy.THD_DB,
