@@ -180,3 +180,11 @@ def candidates(study: Study, names: Sequence[str] | None, found: Mapping,
             eff = cls(attach=pl)
             out.append(Hypothesis(eff, pl, base + Coordinates.of(None, eff.parameters())))
     return out
+
+
+def pruned(study: Study, names: Sequence[str] | None, kept: Sequence[Hypothesis],
+           base: Coordinates) -> list[Hypothesis]:
+    """The candidates :func:`candidates` left out by their signature classes (those the
+    model has already stay out)."""
+    have = {h.name for h in kept}
+    return [h for h in candidates(study, names, {}, base) if h.name not in have]

@@ -288,9 +288,21 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             h.notes.append("not calibrated on the screening level: the budget was spent on "
                            "the better ranked")
     _drop_scratch(hyps)
+    return race_order(hyps)
+
+
+def race_order(hyps: Sequence[Hypothesis]) -> list[Hypothesis]:
+    """Most promising first: by the chi2 of the calibration on the level, then by the
+    looks' score, then by the first look."""
     return sorted(hyps, key=lambda h: (h.screen.get("calibrated", math.inf),
                                        h.screen.get("score", math.inf),
-                                       h.screen["first_look"]))
+                                       h.screen.get("first_look", math.inf)))
+
+
+def race_explains_level(ranked: Sequence[Hypothesis]) -> bool:
+    """Whether some candidate's calibration on the level passed the noise's chi-square
+    test there."""
+    return any(h.screen.get("calibrated_fits") for h in ranked)
 
 
 def _calibrate_in_race(h: Hypothesis, points: int, levels: list[int], level: int,
@@ -299,6 +311,7 @@ def _calibrate_in_race(h: Hypothesis, points: int, levels: list[int], level: int
     fit = calibrate_on(h, points, levels)
     h.screen["calibrated"] = fit.chi2
     h.screen["calibrated_point"] = fit.values
+    h.screen["calibrated_fits"] = discrepancy.fits(fit.best.w, h.k)
     log(f"  {h.name} calibrated on level {level + 1}: chi2 {fit.chi2:.4g} "
         f"({fit.n_points} points)")
     return fit
