@@ -120,6 +120,7 @@ def run_case(study, case: dict, method: str, workers: int, log=lambda s: None,
            "noise_reached": chi2_true_cal / n <= 1 + 3 * math.sqrt(2 / n),
            "truth_fits_noise": discrepancy.fits(w, k_true) if w is not None else False,
            "simulations": res.n_simulations, "by_step": res.simulations_by_step,
+           "beyond_budget": res.criteria.get("beyond_budget", 0),
            "wall_s": wall, "budget_scale": budget_scale, **where}
     return judged(row)
 

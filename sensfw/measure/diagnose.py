@@ -40,8 +40,10 @@ and the named hypotheses' (at most ``POLISH_ROUNDS`` rounds of ``4 (k + 1)`` poi
 and the screen's first looks from the nominal values (one run per candidate, where H0's optimum
 moved more than ``from_nominal`` from them) and, where the race's best calibration on its
 level misses the noise, the next finalists' calibrations there (the leader's points each,
-``criteria["beyond_budget"]``), so a diagnosis ends within about
-twice its budget (the suite's preload case: 306 simulations for 200).
+``criteria["beyond_budget"]``) and, where none of the candidates the signature classes kept
+explains that level, the race of those they left out, so a diagnosis ends within about
+twice its budget plus what its race spent beyond it (the suite's preload case: 306
+simulations for 200; ``bench/recovery.py``'s seed 2069: 723 for 300, 148 of them beyond).
 """
 
 from __future__ import annotations

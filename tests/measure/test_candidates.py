@@ -62,3 +62,29 @@ def test_the_default_candidates_are_the_effects_that_fit_the_model():
     got = candidate_names(Study.load(QUICK), None)
     assert "micro_slip" in effects.names() and all(n != "micro_slip" for n, _ in got)
     assert ("added_mass", None) in got and all(p is None for _, p in got)
+
+
+def test_the_pruned_race_gets_exactly_what_the_signature_classes_left_out():
+    """Where no kept candidate explains the screening level, diagnose races the candidates
+    the signature classes left out (recovery seeds 2073 and 2082, :func:`pruned`): with
+    the classes of seed 2082 (even harmonics alone), the kept and the left-out candidates
+    are disjoint, together every candidate, and the left-out ones are those of the effects
+    whose classes the measurement does not show (an added mass, a damping among them)."""
+    from sensfw.measure import signatures
+    from sensfw.measure.calibration import Coordinates
+    from sensfw.measure.hypotheses import candidates, pruned
+    from sensfw.plugins import effects
+
+    study = Study.load(QUICK)
+    base = Coordinates.of(None, [])
+    found = {"even_harmonics": True}
+    kept = candidates(study, None, found, base)
+    left = pruned(study, None, kept, base)
+    every = candidates(study, None, {}, base)
+    assert {h.name for h in kept}.isdisjoint(h.name for h in left)
+    assert sorted(h.name for h in kept + left) == sorted(h.name for h in every)
+    assert {h.effect.name for h in left} == {
+        n for n in effects.names()
+        if not signatures.allows(effects.get(n), found) and any(
+            h.effect.name == n for h in every)}
+    assert {"added_mass", "damping"} <= {h.effect.name for h in left}

@@ -14,13 +14,17 @@ import pytest
 
 pytestmark = pytest.mark.slow
 
-#: benchmark case index -> seed 2025 + index (bench/recovery.py --seed 2025): a contact
-#: hardening at bearing l1, named with its place and calibrated to the noise. Cases 1 (no
+#: benchmark case index -> seed 2025 + index (bench/recovery.py --seed 2025): 4, a contact
+#: hardening at bearing l1, named with its place and calibrated to the noise; 48, a damping
+#: at slide bearing 2 on two levels that the signature classes, read off H0's poor fit
+#: (chi2 3111 for 93 entries), leave out: named since the candidates they left out race
+#: where none they kept explains the screening level (a contact hardening at bearing l3
+#: was named before, at chi2 1089 where the truth's values give 63). Cases 1 (no
 #: effect), 15 (a limit stop the data cannot tell: "parameters") and 16 (a friction H0
 #: passes the noise's test on while the truth beats it by far) were here too; they are in
 #: every run of the benchmark (``--first 0``) and the suite's 20 minutes could not hold them
 #: (the no-effect verdict is also test_diagnose.py's noise case)
-CASES = [4]
+CASES = [4, 48]
 
 
 @pytest.fixture(scope="module")
@@ -38,5 +42,7 @@ def test_a_benchmark_case_ends_right(index, recovery):
     assert row["outcome"] in ("right", "correct", "correct (cannot tell)"), row
     assert row["noise_reached"], row
     # the default budget, plus H0's rematch before a candidate is credited: at most as many
-    # simulations as the leader spent, itself within the budget (sensfw.measure.diagnose)
-    assert row["simulations"] <= 2 * (150 + 50 * len(case["levels"])), row
+    # simulations as the leader spent, itself within the budget, plus what the race spent
+    # beyond it (sensfw.measure.diagnose)
+    assert row["simulations"] <= 2 * (150 + 50 * len(case["levels"])) + \
+        row["beyond_budget"], row
