@@ -7,7 +7,9 @@ top-down:
 
 1. **hypotheses** (:mod:`.hypotheses`): H0, "parameters only" (the study's calibration
    variables), and every candidate effect at every place it fits, pruned by the signature
-   classes of the measured amplitude dependence;
+   classes of the measured amplitude dependence (read off H0's fit, which may have
+   compensated for the effect: where no candidate they kept explains the screening level
+   to its noise, those they left out race there too);
 2. **calibration** (:mod:`.calibration`): H0 globally (design, residual surrogate, DFO-LS;
    without ``global_phase``, Levenberg-Marquardt from the study's values);
    then a screen of the candidates on the level H0 misfits most (:mod:`.screening`: first
