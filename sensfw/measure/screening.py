@@ -29,7 +29,7 @@ three rounds of successive halving.
    level
    (:func:`sensfw.measure.diagnose.calibrate_hypothesis`: design, residual surrogate,
    DFO-LS), their surrogates seeded with all of the above, as far as the race's budget
-   goes; where the best of them misses the noise on the level (chi-square test), the
+   goes; where the best of them misses the noise on the level (:func:`explains`), the
    next of these finalists are calibrated too, with the leader's points each and beyond
    the budget, until one reaches it.
 
@@ -53,6 +53,15 @@ from .hypotheses import Hypothesis
 from .residuals import Residuals
 
 Log = Callable[[str], None]
+
+#: chi2 per entry that a calibration on the level may leave and still count as explaining
+#: it, where the noise's chi-square test fails: the noise model is approximate (THD
+#: entries biased at low levels, heavy-tailed band entries), and over the 40 seeds of
+#: ``bench/recovery.py`` the true values themselves leave chi2/n up to 3.78
+#: (``bench/whitening.py``, stop 45). Below it the race does not calibrate further
+#: finalists, nor race the candidates the signature classes left out: seed 2045's leader
+#: at 77.6 for 43 entries (the truth, named) cost 541 more simulations with the bare test
+TRUTH_PER_ENTRY = 4.0
 #: calibrate one hypothesis on some levels: (h, budget in points, levels) -> Fit
 CalibrateOn = Callable[[Hypothesis, int, list[int]], object]
 
@@ -265,7 +274,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
             continue
         fits[h.name] = _calibrate_in_race(h, share, levels, level, calibrate_on, log)
         shares.append(share)
-    # 4. a race whose best calibration does not explain the level to its noise: the next
+    # 4. a race whose best calibration does not explain the level (:func:`explains`): the next
     # finalists too, each with the leader's points, until one does (beyond the race's
     # budget, ``h.screen["beyond_budget"]``): the looks rank candidates only roughly, and
     # the second looks may have spent the room they were to get (seeds 2069 and 2072: the
@@ -274,7 +283,7 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     for h in finalists:
         best = min(finalists, key=lambda f: fits[f.name].chi2 if f.name in fits
                    else math.inf)
-        if best.name not in fits or discrepancy.fits(fits[best.name].best.w, best.k):
+        if best.name not in fits or explains(fits[best.name].best.w, best.k):
             break
         if h.name in fits:
             continue
@@ -299,9 +308,15 @@ def race_order(hyps: Sequence[Hypothesis]) -> list[Hypothesis]:
                                        h.screen.get("first_look", math.inf)))
 
 
+def explains(w: np.ndarray, k: int) -> bool:
+    """Whether a calibration on the level explains it as well as a true hypothesis does:
+    its residuals pass the noise's chi-square test (:func:`.discrepancy.fits`), or leave
+    at most ``TRUTH_PER_ENTRY`` chi2 per entry."""
+    return discrepancy.fits(w, k) or float(w @ w) <= TRUTH_PER_ENTRY * len(w)
+
+
 def race_explains_level(ranked: Sequence[Hypothesis]) -> bool:
-    """Whether some candidate's calibration on the level passed the noise's chi-square
-    test there."""
+    """Whether some candidate's calibration on the level explains it (:func:`explains`)."""
     return any(h.screen.get("calibrated_fits") for h in ranked)
 
 
@@ -311,7 +326,7 @@ def _calibrate_in_race(h: Hypothesis, points: int, levels: list[int], level: int
     fit = calibrate_on(h, points, levels)
     h.screen["calibrated"] = fit.chi2
     h.screen["calibrated_point"] = fit.values
-    h.screen["calibrated_fits"] = discrepancy.fits(fit.best.w, h.k)
+    h.screen["calibrated_fits"] = explains(fit.best.w, h.k)
     log(f"  {h.name} calibrated on level {level + 1}: chi2 {fit.chi2:.4g} "
         f"({fit.n_points} points)")
     return fit
