@@ -159,8 +159,9 @@ def test_a_race_whose_leader_misses_the_noise_calibrates_the_next_finalist(monke
     second looks had spent the room of all calibrations on the level but the leader's,
     whose calibration ended at chi2 6996 and 1162 on a level of about 43 entries; the
     wrong effect was named. A leader that misses the noise on the level (chi-square test
-    at 1e-3, and more chi2 per entry than a true hypothesis leaves) must not end the race: the next finalist gets the leader's points, beyond the
-    budget, and is counted as such."""
+    at 1e-3, and more chi2 per entry than a true hypothesis leaves) must not end the race:
+    the next finalist gets the leader's points, beyond the budget, and is counted as
+    such."""
     from scipy.stats import chi2 as chi2_dist
 
     from sensfw.measure.screening import TRUTH_PER_ENTRY
