@@ -243,9 +243,11 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
             log(f"no candidate the signature classes kept explains level {level + 1} to its "
                 f"noise: the {len(left_out)} they left out race there too")
             before = res.n_simulations
+            # their first looks, four second looks (three runs each) and the reserve of
+            # the screen's three calibrations on the level (6 (d + 1) points each)
             ranked = race_order(ranked + screen(
                 res, h0, left_out, h0_cmp, level, on_level,
-                len(left_out) + 3 * 6 * (h0.k + 1) + 12, margin=min_delta_bic,
+                len(left_out) + 4 * 3 + 3 * 6 * (h0.k + 1), margin=min_delta_bic,
                 from_nominal=from_nominal, log=log))
             hyps = [*hyps, *left_out]
             beyond += res.n_simulations - before
