@@ -265,15 +265,14 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
                  if i == 0 or h.screen["score"] < chi0_lin - margin]
     res.step = "race calibrations"
     least = least_shares(finalists, left(), 6 * (h0.k + 1))
-    fits: dict[str, object] = {}
-    shares = []
+    lead_share = 0
     for i, h in enumerate(finalists[:len(least)]):
         # an even split of what is left, each at least its least share
         share = min(max(left() // (len(least) - i), least[i]), left() - sum(least[i + 1:]))
         if share < 2 * h.k + 2:
             continue
-        fits[h.name] = _calibrate_in_race(h, share, levels, level, calibrate_on, log)
-        shares.append(share)
+        _calibrate_in_race(h, share, levels, level, calibrate_on, log)
+        lead_share = lead_share or share
     # 4. a race whose best calibration does not explain the level (:func:`explains`): the next
     # finalists too, each with the leader's points, until one does (beyond the race's
     # budget, ``h.screen["beyond_budget"]``): the looks rank candidates only roughly, and
@@ -281,19 +280,18 @@ def screen(res: Residuals, h0: Hypothesis, hyps: Sequence[Hypothesis], h0_cmp, l
     # truth, third and second of the finalists, never calibrated; the leader ended at chi2
     # 6996 and 1162 on a level of about 43 entries)
     for h in finalists:
-        best = min(finalists, key=lambda f: fits[f.name].chi2 if f.name in fits
-                   else math.inf)
-        if best.name not in fits or explains(fits[best.name].best.w, best.k):
+        if not lead_share or race_explains_level(finalists):
             break
-        if h.name in fits:
+        if "calibrated" in h.screen:
             continue
         before = res.n_simulations
-        log(f"  the best calibration on the level (chi2 {fits[best.name].chi2:.4g}) misses "
-            f"the noise: {h.name} calibrated there too")
-        fits[h.name] = _calibrate_in_race(h, shares[0], levels, level, calibrate_on, log)
+        best = min(f.screen.get("calibrated", math.inf) for f in finalists)
+        log(f"  the best calibration on the level (chi2 {best:.4g}) misses the noise: "
+            f"{h.name} calibrated there too")
+        _calibrate_in_race(h, lead_share, levels, level, calibrate_on, log)
         h.screen["beyond_budget"] = res.n_simulations - before
     for h in finalists:
-        if h.name not in fits:
+        if "calibrated" not in h.screen:
             h.notes.append("not calibrated on the screening level: the budget was spent on "
                            "the better ranked")
     _drop_scratch(hyps)
@@ -321,15 +319,15 @@ def race_explains_level(ranked: Sequence[Hypothesis]) -> bool:
 
 
 def _calibrate_in_race(h: Hypothesis, points: int, levels: list[int], level: int,
-                       calibrate_on: CalibrateOn, log: Log):
-    """One race calibration on the level: its chi2 and optimum in ``h.screen``."""
+                       calibrate_on: CalibrateOn, log: Log) -> None:
+    """One race calibration on the level: its chi2, optimum and whether it explains the
+    level in ``h.screen``."""
     fit = calibrate_on(h, points, levels)
     h.screen["calibrated"] = fit.chi2
     h.screen["calibrated_point"] = fit.values
     h.screen["calibrated_fits"] = explains(fit.best.w, h.k)
     log(f"  {h.name} calibrated on level {level + 1}: chi2 {fit.chi2:.4g} "
         f"({fit.n_points} points)")
-    return fit
 
 
 def _drop_scratch(hyps: Sequence[Hypothesis]) -> None:
