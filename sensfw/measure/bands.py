@@ -126,28 +126,6 @@ def band_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.nda
     return np.array(out)
 
 
-def band_white_noise(sig: Signals, channel: str, bands, half_width: int = 4) -> np.ndarray:
-    """Relative standard error of each band's H1 (:func:`band_frf_db`) if the record's
-    output noise were white at the level :func:`noise_sigma` reads off it: per bin
-    ``E|N_k|^2 = n sigma^2``, so the error is ``sqrt(n sigma^2 / sum_b |H P|^2)``, with
-    ``sum_b |H P|^2`` the band's output power less the noise's (not the local fit's,
-    which rounds off a lightly damped peak).
-
-    A floor for :func:`band_noise` where a model's own record takes away most of the
-    measured scatter (:func:`~sensfw.measure.compare.compare_level`): the low quantile of
-    :func:`noise_sigma` keeps to the quietest lines, so on a nonlinear record it reads the
-    noise plus the weakest distortion, never less than the noise."""
-    X = np.fft.rfft(sig.channel(channel))
-    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
-    per_bin = len(sig.force) * noise_sigma(sig, channel, half_width=half_width) ** 2
-    out = []
-    for lo, _, hi in bands:
-        sel = (f >= lo) & (f < hi)
-        signal = np.sum(np.abs(X[sel]) ** 2) - per_bin * int(sel.sum())
-        out.append(float(np.sqrt(per_bin / signal)) if signal > 0 else np.inf)
-    return np.array(out)
-
-
 #: a record's usable bandwidth is its sample rate over this (the pass band of a data
 #: acquisition's anti-aliasing filter: LMS, B&K and NI analysers show fs / 2.56)
 ALIAS_FREE = 2.56
@@ -162,8 +140,7 @@ def usable_limit(sig: Signals) -> float:
     return sig.fs / 2 if fr >= sig.fs * (1 - 1e-6) else fr / ALIAS_FREE
 
 
-def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05,
-                half_width: int = 4) -> float:
+def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
     """Standard deviation of the output noise of a record (assumed white), from the
     residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n sigma^2``,
     read off a low quantile of the residual power over the bins (the power of complex
@@ -179,7 +156,7 @@ def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05,
     rate of the same density there (for the mean over the record, the same standard
     error as the recorded samples give: ``sigma_r^2 / n_r``). Over every bin it would be
     the empty stop band's, nearly 0."""
-    f, _, _, resid = _local_fit(sig, channel, half_width)
+    f, _, _, resid = _local_fit(sig, channel)
     held = resid[1:][f[1:] < usable_limit(sig)]
     q = float(np.quantile(held if len(held) else resid[1:], quantile)) / -np.log1p(-quantile)
     return float(np.sqrt(q / len(sig.force)))

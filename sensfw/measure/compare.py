@@ -25,7 +25,6 @@ from .bands import (
     band_frf_db,
     band_noise,
     band_rms,
-    band_white_noise,
     frf_db,
     line_noise_db,
     noise_sigma,
@@ -92,9 +91,8 @@ def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges)
         top = usable_limit(sig)
         hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True, top),
                                 harmonic_floor(sig, channel, f_max=top),
-                                line_noise_db(sig, channel, band),
-                                band_white_noise(sig, channel, edges))
-    return hit[1], hit[2], hit[3], hit[4]
+                                line_noise_db(sig, channel, band))
+    return hit[1], hit[2], hit[3]
 
 
 def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
@@ -115,7 +113,7 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
     if isinstance(measured, FRFRecord) or steps_of(measured.f_inst, measured.fs) is not None:
         return compare_lines(measured, model, channel, band, level, file, detail, error_band)
     edges = analysis_bands(*band)
-    mx, floor, (fn, line_noise), e_white = _measured_side(measured, channel, band, edges)
+    mx, floor, (fn, line_noise) = _measured_side(measured, channel, band, edges)
     mm = _side(model, channel, band, edges, detail, usable_limit(measured))
     f, dbm, dbx = mm.f, mm.db, mx.db
     if len(f) != len(mx.f) or not np.allclose(f, mx.f):
@@ -123,15 +121,9 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
     bands = []
     bm, bx = mm.bands_db, mx.bands_db
     # the measurement's scatter minus what the model's own record shows (nonlinear
-    # distortion and leakage, shared by both): its random noise. Floored by the white
-    # noise the record's quietest lines read (no more than its scatter): a model whose
-    # own record is more distorted than the measurement's would otherwise take the noise
-    # away too (bench/whitening.py, with the THD's noise floor: true values above the
-    # noise test's bound in 14 of 80 cases without it, 0 with it) -- and at a quarter of
-    # the scatter
+    # distortion and leakage, shared by both): its random noise (floored at a quarter)
     e_meas, e_model = mx.noise, mm.noise
     noise = np.sqrt(np.maximum(e_meas**2 - e_model**2, (0.25 * e_meas) ** 2))
-    noise = np.maximum(noise, np.minimum(e_meas, e_white))
     to_db = 20 / np.log(10) / np.sqrt(2)  # standard error in dB: ln|1 + e z| ~ Re(e z)
     for (lo, c, hi), a, b, e, et in zip(edges, bm, bx, noise, e_meas, strict=True):
         sel = (f >= lo) & (f < hi)
