@@ -293,7 +293,7 @@ def diagnose(study: Study, measurements: Sequence[Measurement], runner: Runner,
         if calibrated:
             _settle_h0(res, h0, calibrated, budget, min_delta_bic, opts, log,
                        restart=lambda: _restart_race(res, h0, ranked, calibrated, final,
-                                                     h0_cmp, opts, log, min_delta_bic))
+                                                     h0_cmp, opts, log))
             res.step = "other places"
             _other_places(res, hyps, calibrated, opts, log, h0.bic(n), min_delta_bic, final)
             _join_twins(res, hyps, calibrated, log)
@@ -479,7 +479,7 @@ def _refresh_h0(res: Residuals, h0: Hypothesis, calibrated: Sequence[Hypothesis]
 
 def _restart_race(res: Residuals, h0: Hypothesis, ranked: Sequence[Hypothesis],
                   calibrated: list[Hypothesis], final: int, h0_cmp, opts: dict,
-                  log: Log, margin: float = 10.0) -> None:
+                  log: Log) -> None:
     """The race's calibrated candidates that were not chosen, again from H0's refreshed
     optimum: each is run (at every level) at those base values with its own values from
     its race optimum and from its probes, and the best ``final`` of them are calibrated
@@ -488,29 +488,8 @@ def _restart_race(res: Residuals, h0: Hypothesis, ranked: Sequence[Hypothesis],
     by more than the margin), the race ranked the candidates by how well each escaped
     the stall, not by what each explains (``bench/verdicts.py``'s preload
     case: the true candidate stalled at chi2 398 on its level from H0's 725, H0 refreshed
-    reached 325.5 and no chosen candidate beat that by the margin).
-
-    The candidates calibrated at every level started from the same stall: each that no
-    longer beats H0 by ``margin`` is run and refined likewise (``test_diagnose.py``'s
-    flexible mode: calibrated from H0's stall at 7097 to 2308, then H0 refreshed from its
-    base values reached 2259 and the effect, at its neutral values, was never tried from
-    there)."""
+    reached 325.5 and no chosen candidate beat that by the margin)."""
     base = h0.fit.values
-    for h in [c for c in calibrated if c.fit.chi2 > h0.fit.chi2 - margin]:
-        own = {k: v for k, v in h.fit.values.items() if k in h.own}
-        ws = res.evaluate(h.effects, [{**base, **h.neutral, **o}
-                                      for o in [own, *h.effect.probes(h0_cmp)]],
-                          f"{h.name} from H0 refreshed")
-        best = min((float(w @ w) for w in ws if w is not None), default=math.inf)
-        log(f"  {h.name} again from H0's refreshed optimum (chi2 {best:.4g} at its best "
-            f"start, {h.fit.chi2:.4g} calibrated)")
-        old = h.fit.chi2
-        fit = calibrate_hypothesis(res, h, 6 * h.k + 6, log=log, **{**opts, **LOCAL_ONLY})
-        if fit.chi2 < old:
-            h.fit = fit
-            h.notes.append(f"calibrated again from H0's refreshed optimum: chi2 {old:.4g} "
-                           f"-> {fit.chi2:.4g}")
-        log(f"  {h.name}: chi2 {h.fit.chi2:.4g}")
     scored = []
     for h in ranked:
         if h in calibrated or "calibrated_point" not in h.screen:
