@@ -3,6 +3,7 @@ traceback."""
 
 import copy
 import os
+import re
 import subprocess
 import sys
 import tomllib
@@ -55,6 +56,11 @@ def test_units_are_converted_and_checked():
     assert to_unit("50 %", "") == 0.5
     with pytest.raises(ValueError, match="cannot convert '3 kg' to N/mm"):
         to_unit("3 kg", "N/mm")
+    # what pint's tokenizer or arithmetic raises is a ValueError naming the value too (an
+    # unmatched bracket raised tokenize.TokenError: Hypothesis, test_properties.py)
+    for bad in ("[", "5 Hz)", "{", "1 / 0 Hz"):
+        with pytest.raises(ValueError, match=f"cannot read '{re.escape(bad)}' as a quantity"):
+            to_unit(bad, "Hz")
 
 
 def test_all_problems_reported_at_once_with_dotted_paths():

@@ -4,6 +4,7 @@ meaning the unit the model declares."""
 from __future__ import annotations
 
 import functools
+import tokenize
 
 from .schema import Quantity
 
@@ -36,6 +37,10 @@ def to_unit(value: Quantity, unit: str) -> float:
     except pint.DimensionalityError:
         raise ValueError(f"cannot convert {value!r} to {unit or 'a plain number'}") from None
     except (pint.UndefinedUnitError, pint.errors.DefinitionSyntaxError, ValueError,
-            AttributeError, TypeError, AssertionError) as err:
-        raise ValueError(f"cannot read {value!r} as a quantity in {unit or '1'}: {err}") \
+            AttributeError, TypeError, AssertionError, ArithmeticError, SyntaxError,
+            tokenize.TokenError) as err:
+        # pint's parser is Python's tokenizer: an unmatched bracket ("[", "5 Hz)") raises
+        # TokenError, "1 / 0 Hz" ZeroDivisionError
+        why = "unbalanced brackets" if isinstance(err, tokenize.TokenError) else err
+        raise ValueError(f"cannot read {value!r} as a quantity in {unit or '1'}: {why}") \
             from None
