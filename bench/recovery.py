@@ -173,8 +173,12 @@ def summary(rows: list[dict]) -> None:
     by = {}
     for r in map(judged, rows):
         scale = r.get("budget_scale", 1.0)
+        drawn = r.get("drawn") or {}
+        unusual = {k: v for k, v in drawn.items()
+                   if tuple(v) != {"noise": (0.01, 0.05), "factors": (0.6, 1.6)}.get(k)}
         by.setdefault(f"{r.get('study', 'quick')}, method {r['method']}" + (
-            f", budget x{scale:g}" if scale != 1.0 else ""), []).append(r)
+            f", budget x{scale:g}" if scale != 1.0 else "") + "".join(
+            f", {k} {v[0]:g}-{v[1]:g}" for k, v in unusual.items()), []).append(r)
     for key, rs in by.items():
         print(f"{key}: {len(rs)} cases (rates with their 95 % Wilson interval)")
         counts: dict = {}
@@ -330,6 +334,13 @@ def append_part(path: Path | None, row: dict) -> None:
             f.write(json.dumps(row) + "\n")
 
 
+def _range(text: str) -> tuple[float, float]:
+    lo, hi = (float(x) for x in text.split(","))
+    if not 0 < lo <= hi:
+        raise argparse.ArgumentTypeError(f"{text!r}: need LO,HI with 0 < LO <= HI")
+    return lo, hi
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     part_arguments(ap, workers=2)
@@ -346,6 +357,12 @@ def main() -> None:
     ap.add_argument("--budget-scale", type=float, default=1.0,
                     help="diagnose's budget as this multiple of its default (150 + 50 per "
                          "level): what the rates cost in simulations")
+    ap.add_argument("--noise", type=_range, default=None, metavar="LO,HI",
+                    help="the noise's range (fraction of each channel's RMS; default "
+                         "0.01,0.05): cases unlike those diagnosis was tuned on")
+    ap.add_argument("--factors", type=_range, default=None, metavar="LO,HI",
+                    help="the base variables' offsets as factors of their nominal values "
+                         "(log-uniform; default 0.6,1.6)")
     ap.add_argument("--baseline", type=Path, nargs="*",
                     help="with --merge: parts of a baseline run of the same seeds, compared "
                          "case by case (McNemar's exact test per line of the bar)")
@@ -360,8 +377,12 @@ def main() -> None:
     study = bench_study(args.study, args.short)
     rows = []
     for i in range(args.first, args.first + args.cases):
-        case = cases.draw(study, args.seed + i, LEVELS[args.study])
+        case = cases.draw(study, args.seed + i, LEVELS[args.study],
+                          noise=args.noise or cases.NOISE,
+                          factors=args.factors or cases.FACTORS)
         case["study"] = study.name
+        case["drawn"] = {"noise": list(args.noise or cases.NOISE),
+                         "factors": list(args.factors or cases.FACTORS)}
         r = run_case(study, case, args.method, args.workers,
                      log=print if args.verbose else (lambda s: None), store=args.store,
                      from_nominal=args.from_nominal, budget_scale=args.budget_scale)

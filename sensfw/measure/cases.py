@@ -25,10 +25,22 @@ from ..plugins import effects
 from ..study import Study
 from .calibration import Coordinates
 
+#: the ranges :func:`draw` draws from by default (``bench/recovery.py``'s cases)
+NOISE = (0.01, 0.05)
+FACTORS = (0.6, 1.6)
 
-def draw(study: Study, seed: int, levels: Sequence[float]) -> dict:
+
+def draw(study: Study, seed: int, levels: Sequence[float],
+         noise: tuple[float, float] = NOISE, factors: tuple[float, float] = FACTORS) -> dict:
     """One random case (module docstring) from ``seed``; ``levels`` are the excitation
-    levels a case draws one to three of."""
+    levels a case draws one to three of. ``noise`` (fraction of each channel's RMS,
+    uniform) and ``factors`` (of the base variables' nominal values, log-uniform) widen or
+    move the defaults' ranges for cases unlike those a method was tuned on; with the
+    defaults a seed draws the same case as ever (the draws keep their order)."""
+    if not 0 < noise[0] <= noise[1]:
+        raise ValueError(f"noise range {noise}: need 0 < low <= high")
+    if not 0 < factors[0] <= factors[1]:
+        raise ValueError(f"factor range {factors}: need 0 < low <= high")
     rng = np.random.default_rng(seed)
     model = model_with_effects(study, [])
     pairs = [(name, place) for name in effects.names()
@@ -52,11 +64,11 @@ def draw(study: Study, seed: int, levels: Sequence[float]) -> dict:
     base = {}
     for v in space.variables:
         if v.name in chosen:
-            f = math.exp(rng.uniform(math.log(0.6), math.log(1.6)))
+            f = math.exp(rng.uniform(math.log(factors[0]), math.log(factors[1])))
             base[v.name] = float(np.clip(v.nominal * f, v.low, v.high))
     case["base"] = base
     case["sets"] = space.to_parameters({**space.nominal_row(), **base})
-    case["noise"] = float(rng.uniform(0.01, 0.05))
+    case["noise"] = float(rng.uniform(*noise))
     n = int(rng.integers(1, 4))
     case["levels"] = sorted(float(x) for x in rng.choice(levels, size=n, replace=False))
     return case

@@ -15,8 +15,8 @@ import pytest
 pytestmark = pytest.mark.slow
 
 #: benchmark case index -> seed 2025 + index (bench/recovery.py --seed 2025): 4, a contact
-#: hardening at bearing l1, named with its place and calibrated to the noise; 48, a damping
-#: at slide bearing 2 on two levels that the signature classes, read off H0's poor fit
+#: hardening at bearing l3's shoulder, named with its place and calibrated to the noise;
+#: 48, a damping at slide bearing 2 on two levels that the signature classes, read off H0's poor fit
 #: (chi2 3111 for 93 entries), leave out: named since the candidates they left out race
 #: where none they kept explains the screening level (a contact hardening at bearing l3
 #: was named before, at chi2 1089 where the truth's values give 63). Cases 1 (no
