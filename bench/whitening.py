@@ -61,6 +61,10 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--store", type=Path, default=None, help="a run store to share")
+    ap.add_argument("--noise", type=rec._range, default=None, metavar="LO,HI",
+                    help="the cases' noise range (bench/recovery.py's --noise)")
+    ap.add_argument("--factors", type=rec._range, default=None, metavar="LO,HI",
+                    help="the base variables' offset factors (bench/recovery.py's --factors)")
     args = ap.parse_args()
     from sensfw.measure import cases
     from sensfw.runs import Runner, RunStore
@@ -70,7 +74,9 @@ def main() -> None:
     rows = []
     with Runner(RunStore(store), backend="processes", workers=args.workers) as runner:
         for i in range(args.first, args.first + args.cases):
-            case = cases.draw(study, args.seed + i, rec.LEVELS["quick"])
+            case = cases.draw(study, args.seed + i, rec.LEVELS["quick"],
+                              noise=args.noise or cases.NOISE,
+                              factors=args.factors or cases.FACTORS)
             t = at_truth(study, case, runner)
             z2 = (t["r"] / t["s"]) ** 2
             n = len(z2)

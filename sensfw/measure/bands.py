@@ -2,8 +2,10 @@
 
 The comparison bands (:func:`analysis_bands`: one-third octaves, finer for a narrow sweep),
 the smoothed Hv FRF in dB (:func:`frf_db`), each band's coherent H1 (:func:`band_frf_db`) and
-its standard error from the record's output noise (:func:`band_noise`, :func:`noise_sigma`:
-one local fit of the FRF, :func:`_local_fit`).
+its standard error from the record's white noise on output and excitation
+(:func:`band_white_noise`, :func:`noise_sigma`, :func:`excitation_noise_sigma`), and its
+total scatter, noise and distortion (:func:`band_noise`: one local fit of the FRF,
+:func:`_local_fit`).
 """
 
 from __future__ import annotations
@@ -160,6 +162,63 @@ def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
     held = resid[1:][f[1:] < usable_limit(sig)]
     q = float(np.quantile(held if len(held) else resid[1:], quantile)) / -np.log1p(-quantile)
     return float(np.sqrt(q / len(sig.force)))
+
+
+def excitation_noise_sigma(sig: Signals, band: tuple[float, float],
+                           min_bins: int = 32) -> float:
+    """Standard deviation of the noise on a record's excitation channel (assumed white),
+    from its spectrum above the excitation's band: between ``1.15 band[1]`` and 0.95 of
+    :func:`usable_limit` the force holds only its noise (and the sweep's leakage, which the
+    median leaves out), so per bin ``E|N_k|^2 = n sigma^2`` is the median power over those
+    bins divided by ``ln 2`` (the power of complex Gaussian noise is exponential). An upper
+    bound: a sweep's own spectrum does not end at its last frequency (its start and end
+    splatter over every bin), which reads as noise of about 2 % of the force's RMS on a
+    short log chirp, so at 1 % noise this gives 2-3 times the noise and at 10 % within 5 %
+    (``tests/measure/test_bands.py``). 0 where fewer than ``min_bins`` such bins exist (no
+    estimate: the band errors then hold the output noise alone)."""
+    P = np.fft.rfft(np.asarray(sig.force, float))
+    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    sel = (f > 1.15 * band[1]) & (f < 0.95 * usable_limit(sig))
+    if int(sel.sum()) < min_bins:
+        return 0.0
+    per_bin = float(np.median(np.abs(P[sel]) ** 2)) / np.log(2.0)
+    return float(np.sqrt(per_bin / len(sig.force)))
+
+
+def band_white_noise(sig: Signals, channel: str, bands, band: tuple[float, float],
+                     excitation_sigma: float | None = None,
+                     output_sigma: float | None = None) -> np.ndarray:
+    """Relative standard error of each band's H1 (:func:`band_frf_db`, ``H_b = sum conj(P)
+    X / sum |P|^2``) from white noise on the output (``output_sigma``, default
+    :func:`noise_sigma`) and on the
+    excitation (``excitation_sigma``, default :func:`excitation_noise_sigma` over the
+    excitation's ``band``), to first
+    order (the delta method; Bendat & Piersol, *Random Data*, 4th ed. 2010, ch. 9, for the
+errors of frequency-response estimates with noise on input and output):
+
+    ``e_b^2 = n (sigma_x^2 sum |P|^2 + sigma_p^2 sum |X|^2) / |sum conj(P) X|^2``.
+
+    The second term carries the part of the response that is not coherent with the force
+    in the band (a swept record's harmonics, the ring-down of other modes): input noise
+    multiplies all of it, so a band whose response is mostly distortion scatters far more
+    than its output noise alone says. Unlike :func:`band_noise` (the residual of a local
+    fit, which also holds the model's own distortion and the fit's bias across a
+    resonance, and is itself a noisy estimate per band), every band's error follows from
+    two noise levels estimated over thousands of bins (``bench/whitening.py`` measures how
+    white the entries are at the truth)."""
+    P = np.fft.rfft(np.asarray(sig.force, float))
+    X = np.fft.rfft(sig.channel(channel))
+    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    n = len(sig.force)
+    sx = noise_sigma(sig, channel) if output_sigma is None else output_sigma
+    sp = excitation_noise_sigma(sig, band) if excitation_sigma is None else excitation_sigma
+    out = []
+    for lo, _, hi in bands:
+        sel = (f >= lo) & (f < hi)
+        cross = float(np.abs(np.sum(np.conj(P[sel]) * X[sel])) ** 2)
+        noise = n * (sx**2 * np.sum(np.abs(P[sel]) ** 2) + sp**2 * np.sum(np.abs(X[sel]) ** 2))
+        out.append(float(np.sqrt(noise / cross)) if cross > 0 else np.inf)
+    return np.array(out)
 
 
 def band_rms(x: np.ndarray, fs: float, band: tuple[float, float]) -> float:

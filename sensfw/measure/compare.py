@@ -25,6 +25,8 @@ from .bands import (
     band_frf_db,
     band_noise,
     band_rms,
+    band_white_noise,
+    excitation_noise_sigma,
     frf_db,
     line_noise_db,
     noise_sigma,
@@ -64,15 +66,16 @@ class _Side:
     f: np.ndarray
     db: np.ndarray
     bands_db: np.ndarray
-    noise: np.ndarray
+    noise: np.ndarray | None  # the band's total scatter (measured side only)
     peaks: list[dict]
     harmonics: dict[int, float]
 
 
 def _side(sig: Signals, channel: str, band: tuple[float, float], edges, detail: bool,
-          f_max: float) -> _Side:
+          f_max: float, scatter: bool = False) -> _Side:
     f, db, H = frf_db(sig, channel, band, complex_frf=True)
-    return _Side(f, db, band_frf_db(sig, channel, edges), band_noise(sig, channel, edges),
+    return _Side(f, db, band_frf_db(sig, channel, edges),
+                 band_noise(sig, channel, edges) if scatter else None,
                  fit_resonances(f, H, resonances(f, db)) if detail else [],
                  harmonics(sig, channel, f_max=f_max))
 
@@ -89,10 +92,31 @@ def _measured_side(sig: Signals, channel: str, band: tuple[float, float], edges)
         if len(_MEASURED) > 64:
             _MEASURED.clear()
         top = usable_limit(sig)
-        hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True, top),
+        hit = _MEASURED[key] = (sig, _side(sig, channel, band, edges, True, top, True),
                                 harmonic_floor(sig, channel, f_max=top),
-                                line_noise_db(sig, channel, band))
-    return hit[1], hit[2], hit[3]
+                                line_noise_db(sig, channel, band),
+                                excitation_noise_sigma(sig, band), {})
+    return hit[1], hit[2], hit[3], hit[4], hit[5]
+
+
+def _white_noise(measured: Signals, model: Signals, channel: str, band, edges, spectral: float,
+                 cache: dict) -> np.ndarray:
+    """The band errors of :func:`~.bands.band_white_noise` for ``measured``, its
+    excitation's noise the lower of two upper bounds: the force's spectrum above its band
+    (``spectral``) and, where the model was driven by the study's ideal sweep, the
+    measured force less that sweep (its noise, and what else the rig's force holds: a
+    shaker's distortion, a drift). A model driven by the record itself shares its noise
+    as input, but the structure never felt it: the spectral bound stays."""
+    sp = spectral
+    if len(model.force) == len(measured.force):
+        x = np.asarray(measured.force, float)
+        diff = float(np.std(x - np.asarray(model.force, float)))
+        if diff > 1e-6 * float(np.std(x)):  # else the model was driven by the record itself
+            sp = min(sp, diff)
+    key = round(sp, 12)
+    if key not in cache:
+        cache[key] = band_white_noise(measured, channel, edges, band, excitation_sigma=sp)
+    return cache[key]
 
 
 def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
@@ -113,17 +137,23 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
     if isinstance(measured, FRFRecord) or steps_of(measured.f_inst, measured.fs) is not None:
         return compare_lines(measured, model, channel, band, level, file, detail, error_band)
     edges = analysis_bands(*band)
-    mx, floor, (fn, line_noise) = _measured_side(measured, channel, band, edges)
+    mx, floor, (fn, line_noise), spectral, cache = _measured_side(measured, channel, band,
+                                                                  edges)
     mm = _side(model, channel, band, edges, detail, usable_limit(measured))
+    e_white = _white_noise(measured, model, channel, band, edges, spectral, cache)
     f, dbm, dbx = mm.f, mm.db, mx.db
     if len(f) != len(mx.f) or not np.allclose(f, mx.f):
         raise ValueError("model and measurement have different frequency axes; align first")
     bands = []
     bm, bx = mm.bands_db, mx.bands_db
-    # the measurement's scatter minus what the model's own record shows (nonlinear
-    # distortion and leakage, shared by both): its random noise (floored at a quarter)
-    e_meas, e_model = mx.noise, mm.noise
-    noise = np.sqrt(np.maximum(e_meas**2 - e_model**2, (0.25 * e_meas) ** 2))
+    # a band's standard error: the record's white noise on output and excitation carried
+    # through the band's H1 (bands.band_white_noise). Its total scatter (the local fit's
+    # residual: noise, but also distortion that a correct model shares) is kept to judge
+    # which bands can speak (LevelComparison.used_bands), not as the error: minus the model's
+    # own scatter it was itself a noisy estimate, a third to six times the scatter of the
+    # band over noise realisations, and it left out input noise times the incoherent part
+    # of the response (bench/whitening.py)
+    e_meas, noise = mx.noise, e_white
     to_db = 20 / np.log(10) / np.sqrt(2)  # standard error in dB: ln|1 + e z| ~ Re(e z)
     for (lo, c, hi), a, b, e, et in zip(edges, bm, bx, noise, e_meas, strict=True):
         sel = (f >= lo) & (f < hi)

@@ -6,19 +6,19 @@ measurement can speak for (its ``used_bands``: within the dynamic range and abov
 noise) and of the THD. Each entry is divided by its standard error, so that a correct model
 leaves residuals of unit variance:
 
-* a band's standard error is the measurement's own random scatter (``noise_db`` of the
-  first comparison, the nominal model's: :func:`~sensfw.measure.compare.band_noise` of the
-  measurement minus that of the model's own record, which shares its nonlinear distortion)
+* a band's standard error is what the record's white noise, on its output and on its
+  excitation, does to the band's H1 (``noise_db`` of the first comparison:
+  :func:`~sensfw.measure.bands.band_white_noise`, which depends on the measurement only)
   combined with ``MODEL_DB``, a floor for what no parameter of a good model can fix (the
   drive's interpolation, the band estimator);
 * the THD's is ``THD_DB`` (harmonic amplitudes of a short sweep scatter by about 1 dB with
-  2 % noise). Known bias: the measured THD holds the record's noise too, so at a low level
-  a correct model's THD entry is -5 to -11 dB (``bench/whitening.py``: over 40 random
-  cases the true values' THD entries have a mean square of 3.1, not 1). Comparing the
-  model's THD combined in power with the record's noise floor
-  (:attr:`~sensfw.measure.comparison.LevelComparison.thd_floor`) takes it to 0.8; it is
-  not used yet because diagnosis and ``augment`` were not better for it on the recovery
-  benchmark (``bench/RECOVERY.md``, stop 45).
+  2 % noise). The measured THD holds the record's noise too (noise adds in power), so the
+  model's THD is compared combined in power with the record's noise floor
+  (:attr:`~sensfw.measure.comparison.LevelComparison.thd_floor`): without it a correct,
+  nearly linear model's THD entry is -5 to -11 dB at a low level and worse at higher
+  noise, and an effect that adds distortion is credited with the noise's
+  (``bench/whitening.py``; ``bench/RECOVERY.md``, stop 61: at 5-10 % noise three of eight
+  cases without an effect ended as false discoveries).
 
 The entries depend on the measurement only, so every hypothesis is scored on the same
 vector. Then ``chi2 = sum w^2`` is chi-square distributed with ``n - k`` degrees of freedom
@@ -92,40 +92,11 @@ def residuals(comparisons: Sequence, entries: Entries) -> tuple[np.ndarray, np.n
             b = by.get(centre)  # None: the model has no response there, a gross misfit
             r.append(MISSING_DB if b is None else b["mean_db"])
         if thd:
-            model = max(c.thd_model or 0.0, 1e-3)
+            # the rig's THD holds its own noise (added in power): so does the model's here
+            model = math.hypot(max(c.thd_model or 0.0, 1e-3), c.thd_floor or 0.0)
             r.append(20 * math.log10(model / c.thd_measured))
     s = [x for part in entries.sigma for x in part]
     return np.array(r, float), np.array(s, float)
-
-
-def noise_thd_note(comparisons: Sequence, entries: Entries, w: np.ndarray,
-                   channels: Sequence[str] = ()) -> str | None:
-    """A line saying how much of ``chi2 = |w|^2`` the THD entries carry where the measured
-    THD is no more than its record's own noise reads (``thd_floor``): there the entry
-    compares the model's distortion with noise, and a model that is right but nearly
-    linear is charged tens of dB for it (the module docstring's known bias). None where
-    such entries carry under half of chi2. ``channels``: the channels of each level, in
-    the comparisons' order (levels outer), to name them."""
-    total = float(w @ w)
-    i, share, where = 0, 0.0, []
-    for k, (c, centres, thd) in enumerate(zip(comparisons, entries.bands, entries.thd,
-                                              strict=True)):
-        i += len(centres)
-        if thd:
-            floor = getattr(c, "thd_floor", None)
-            if floor and c.thd_measured is not None and c.thd_measured <= floor:
-                share += float(w[i] ** 2)
-                ch = f"{channels[k % len(channels)]} " if channels else ""
-                where.append(f"{ch}at {c.level:g} ({c.thd_measured:.3g} % against "
-                             f"{floor:.3g} %)")
-            i += 1
-    if not total > 0 or share < 0.5 * total:
-        return None
-    return (f"{share:.4g} of chi2 {total:.4g} comes from THD entries whose measured THD is "
-            f"no more than the record's own noise reads ({'; '.join(where[:4])}"
-            + (f"; {len(where) - 4} more" if len(where) > 4 else "") + "): there the "
-            "measurement shows no distortion to fit, and a nearly linear model is charged "
-            "for the noise's; judge the fit by the band entries and compare's FRF error")
 
 
 def weighted(comparisons: Sequence, entries: Entries) -> np.ndarray:

@@ -80,21 +80,27 @@ def test_a_run_at_every_level_is_evidence_for_each_level(study, records, runner)
     assert all(t.values["added_mass"] == 0.0 for t in extra)
 
 
-def test_thd_entries_that_compare_a_model_with_noise_are_named():
-    """Two levels, one channel: two bands and a THD entry each. Where the measured THD is
-    no more than the record's noise floor (0.22 % against 0.24 %) and its entry carries
-    most of chi2 (the probe's linear 2-DOF model: 1151 of 1201), a note names it; where
-    the measured THD stands above its floor, it is the model's misfit and no note."""
+def test_the_thd_entry_adds_the_records_noise_to_the_models_thd():
+    """Noise adds in power to every order of a record, so the THD entry compares the
+    model's THD combined in power with the record's noise floor (``thd_floor``): a linear
+    model (no THD) against a measured THD at its floor (0.24 %) is right to within the
+    floor's own scatter (0 dB here, not the -47 dB of a model floored at 1e-3 %); a model
+    whose THD is the measured 2 % with a floor of 0.24 % is 20 log10(hypot(2, 0.24) / 2)
+    = +0.062 dB off, the noise's share."""
+    import math
     from types import SimpleNamespace
 
-    import numpy as np
+    from sensfw.measure.discrepancy import Entries, residuals
 
-    from sensfw.measure.discrepancy import Entries, noise_thd_note
-
-    cs = [SimpleNamespace(level=0.5, thd_measured=0.22, thd_floor=0.24),
-          SimpleNamespace(level=1.0, thd_measured=2.0, thd_floor=0.24)]
-    e = Entries(bands=((100.0, 125.0), (100.0, 125.0)), thd=(True, True))
-    w = np.array([0.5, -0.3, 20.0, 0.4, 0.2, 1.0])
-    note = noise_thd_note(cs, e, w, ["a1"])
-    assert note.startswith("400 of chi2 401.5 comes from THD entries") and "a1 at 0.5 " in note
-    assert noise_thd_note(cs, e, np.array([0.5, -0.3, 1.0, 0.4, 0.2, 20.0]), ["a1"]) is None
+    band = [{"centre_hz": 100.0, "mean_db": 0.3}]
+    cs = [SimpleNamespace(bands=band, thd_model=None, thd_measured=0.24, thd_floor=0.24),
+          SimpleNamespace(bands=band, thd_model=2.0, thd_measured=2.0, thd_floor=0.24),
+          SimpleNamespace(bands=band, thd_model=0.5, thd_measured=2.0, thd_floor=None)]
+    e = Entries(bands=((100.0,),) * 3, thd=(True,) * 3, sigma=((0.2, 1.5),) * 3)
+    r, s = residuals(cs, e)
+    assert r[[0, 2, 4]] == pytest.approx([0.3] * 3)
+    assert r[1] == pytest.approx(20 * math.log10(math.hypot(1e-3, 0.24) / 0.24), abs=1e-9)
+    assert abs(r[1]) < 1e-4
+    assert r[3] == pytest.approx(0.0619, abs=1e-3)
+    assert r[5] == pytest.approx(20 * math.log10(0.25))  # no floor known: the model alone
+    assert s.tolist() == [0.2, 1.5] * 3
