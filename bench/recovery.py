@@ -60,13 +60,16 @@ METHODS = {"local": ("lm", False), "dfols": ("dfols", True), "lm": ("lm", True)}
 DEFAULT_METHOD = "dfols"
 
 
-def bench_study(name: str, short: bool = False):
+def bench_study(name: str, short: bool = False, noise_model: str | None = None):
     """The quick study (``short``: the test suite's 0.15 s chirp at a 2e-5 s step), or the
     bolted beam's study with a short record: a 3 s sweep over 85-100 Hz (the second mode)
-    and a 1 s tail instead of 8 s + 8 s."""
+    and a 1 s tail instead of 8 s + 8 s. ``noise_model`` sets the study's
+    ``[calibration] noise`` (the band errors' noise model; default the study's own)."""
     from sensfw.study import Study
 
     data = tomllib.loads((ROOT / "studies" / f"{name}.toml").read_text())
+    if noise_model is not None:
+        data.setdefault("calibration", {})["noise"] = noise_model
     if name == "quick" and short:
         data["excitation"]["duration"] = "0.15 s"
         data["solver"]["step"] = "2e-5 s"
@@ -177,7 +180,9 @@ def summary(rows: list[dict]) -> None:
         unusual = {k: v for k, v in drawn.items()
                    if tuple(v) != {"noise": (0.01, 0.05), "factors": (0.6, 1.6)}.get(k)}
         by.setdefault(f"{r.get('study', 'quick')}, method {r['method']}" + (
-            f", budget x{scale:g}" if scale != 1.0 else "") + "".join(
+            f", budget x{scale:g}" if scale != 1.0 else "") + (
+            f", noise model {r['noise_model']}" if r.get("noise_model", "scatter") != "scatter"
+            else "") + "".join(
             f", {k} {v[0]:g}-{v[1]:g}" for k, v in unusual.items()), []).append(r)
     for key, rs in by.items():
         print(f"{key}: {len(rs)} cases (rates with their 95 % Wilson interval)")
@@ -363,6 +368,9 @@ def main() -> None:
     ap.add_argument("--factors", type=_range, default=None, metavar="LO,HI",
                     help="the base variables' offsets as factors of their nominal values "
                          "(log-uniform; default 0.6,1.6)")
+    ap.add_argument("--noise-model", choices=["scatter", "propagated"], default=None,
+                    help="the study's [calibration] noise: the band errors' noise model "
+                         "(default the study's own, scatter)")
     ap.add_argument("--baseline", type=Path, nargs="*",
                     help="with --merge: parts of a baseline run of the same seeds, compared "
                          "case by case (McNemar's exact test per line of the bar)")
@@ -374,7 +382,7 @@ def main() -> None:
         return
     from sensfw.measure import cases
 
-    study = bench_study(args.study, args.short)
+    study = bench_study(args.study, args.short, args.noise_model)
     rows = []
     for i in range(args.first, args.first + args.cases):
         case = cases.draw(study, args.seed + i, LEVELS[args.study],
@@ -387,6 +395,7 @@ def main() -> None:
                      log=print if args.verbose else (lambda s: None), store=args.store,
                      from_nominal=args.from_nominal, budget_scale=args.budget_scale)
         r["store"] = str(args.store) if args.store else None
+        r["noise_model"] = study.spec.calibration.noise
         r["from_nominal"] = args.from_nominal
         truth = f"{case['effect']}@{case['place']}" if case["effect"] else "no effect"
         print(f"case {i} ({truth}; {len(case['levels'])} level(s), noise "

@@ -51,7 +51,7 @@ def at_truth(study, case: dict, runner) -> dict:
     r, s = discrepancy.residuals(comps, res.entries)
     thd = np.concatenate([[False] * len(b) + [True] * int(t)
                           for b, t in zip(res.entries.bands, res.entries.thd, strict=True)])
-    return {"r": r, "s": s, "thd": thd}
+    return {"r": r, "s": s, "thd": thd, "levels": res.level_slices()}
 
 
 def main() -> None:
@@ -61,6 +61,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--store", type=Path, default=None, help="a run store to share")
+    ap.add_argument("--noise-model", choices=["scatter", "propagated"], default=None,
+                    help="the study's [calibration] noise (the band errors' noise model)")
     ap.add_argument("--noise", type=rec._range, default=None, metavar="LO,HI",
                     help="the cases' noise range (bench/recovery.py's --noise)")
     ap.add_argument("--factors", type=rec._range, default=None, metavar="LO,HI",
@@ -69,7 +71,7 @@ def main() -> None:
     from sensfw.measure import cases
     from sensfw.runs import Runner, RunStore
 
-    study = rec.bench_study("quick", short=True)
+    study = rec.bench_study("quick", short=True, noise_model=args.noise_model)
     store = args.store or Path(tempfile.mkdtemp(prefix="sensfw-whitening-runs-"))
     rows = []
     with Runner(RunStore(store), backend="processes", workers=args.workers) as runner:
@@ -87,12 +89,15 @@ def main() -> None:
                   f"{case['levels']}: chi2/n {z2.sum() / n:.2f} (bound {bound:.2f}"
                   f"{', EXCEEDED' if rows[-1]['over'] else ''}), THD entries "
                   f"{z2[t['thd']].sum():.1f} of {z2.sum():.1f}", flush=True)
+    per_level = [float(np.mean(r["z2"][sl])) for r in rows for sl in r["levels"]]
     z2 = np.concatenate([r["z2"] for r in rows])
     s = np.concatenate([r["s"] for r in rows])
     thd = np.concatenate([r["thd"] for r in rows])
     print(f"\n{len(rows)} cases: chi2/n above the noise test's bound in "
           f"{sum(r['over'] for r in rows)}; chi2/n median "
-          f"{np.median([r['z2'].mean() for r in rows]):.2f}")
+          f"{np.median([r['z2'].mean() for r in rows]):.2f}; per level: largest "
+          f"{max(per_level):.2f} of {len(per_level)} levels (what a calibration that "
+          f"'explains' a level may leave, sensfw.measure.screening.TRUTH_PER_ENTRY)")
     print("entries                      count   mean z^2   median z^2 (Gaussian: 1, 0.45)")
     print(f"THD                        {thd.sum():7d}   {z2[thd].mean():8.2f}   "
           f"{np.median(z2[thd]):8.2f}")

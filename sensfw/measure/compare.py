@@ -119,10 +119,25 @@ def _white_noise(measured: Signals, model: Signals, channel: str, band, edges, s
     return cache[key]
 
 
+#: how a band's standard error is estimated (``[calibration] noise`` of a study):
+#: ``"scatter"``, the record's own scatter about a local fit less the model's (the default),
+#: or ``"propagated"``, its white noise on output and excitation carried through the band's
+#: H1 (:func:`~.bands.band_white_noise`), with the THD entry read against the record's
+#: noise floor (:class:`~.discrepancy.Entries`)
+NOISE_MODELS = ("scatter", "propagated")
+
+
+def noise_model(study) -> str:
+    """A study's noise model for the band errors (its ``[calibration] noise``; default
+    ``"scatter"``)."""
+    cal = study.spec.calibration
+    return cal.noise if cal is not None else "scatter"
+
+
 def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
                   band: tuple[float, float], level: float, file: str = "",
-                  detail: bool = True, error_band: tuple[float, float] | None = None
-                  ) -> LevelComparison:
+                  detail: bool = True, error_band: tuple[float, float] | None = None,
+                  noise: str = "scatter") -> LevelComparison:
     """The model's record against the measured one on ``channel`` (module docstring).
     ``detail=False`` (a calibration's many evaluations) leaves out the model's resonance
     fits, which no residual uses: the comparison's ``resonances`` are then empty.
@@ -133,29 +148,37 @@ def compare_level(measured: Signals | FRFRecord, model: Signals, channel: str,
     steps, as :func:`sensfw.measure.checks.prepare` leaves them) is compared on its lines
     (:func:`sensfw.measure.lines.compare_lines`: the model must have been driven by the
     measurement's ``drive``). ``error_band`` is the band of the record's error figure
-    (:attr:`LevelComparison.error_db`; default: every compared line)."""
+    (:attr:`LevelComparison.error_db`; default: every compared line). ``noise`` is the
+    band errors' model (:data:`NOISE_MODELS`)."""
+    if noise not in NOISE_MODELS:
+        raise ValueError(f"noise model {noise!r}: one of {', '.join(NOISE_MODELS)}")
     if isinstance(measured, FRFRecord) or steps_of(measured.f_inst, measured.fs) is not None:
         return compare_lines(measured, model, channel, band, level, file, detail, error_band)
     edges = analysis_bands(*band)
     mx, floor, (fn, line_noise), spectral, cache = _measured_side(measured, channel, band,
                                                                   edges)
-    mm = _side(model, channel, band, edges, detail, usable_limit(measured))
-    e_white = _white_noise(measured, model, channel, band, edges, spectral, cache)
+    mm = _side(model, channel, band, edges, detail, usable_limit(measured),
+               scatter=noise == "scatter")
     f, dbm, dbx = mm.f, mm.db, mx.db
     if len(f) != len(mx.f) or not np.allclose(f, mx.f):
         raise ValueError("model and measurement have different frequency axes; align first")
     bands = []
     bm, bx = mm.bands_db, mx.bands_db
-    # a band's standard error: the record's white noise on output and excitation carried
-    # through the band's H1 (bands.band_white_noise). Its total scatter (the local fit's
-    # residual: noise, but also distortion that a correct model shares) is kept to judge
-    # which bands can speak (LevelComparison.used_bands), not as the error: minus the model's
-    # own scatter it was itself a noisy estimate, a third to six times the scatter of the
-    # band over noise realisations, and it left out input noise times the incoherent part
-    # of the response (bench/whitening.py)
-    e_meas, noise = mx.noise, e_white
+    e_meas = mx.noise
+    if noise == "propagated":
+        # the record's white noise on output and excitation carried through the band's H1
+        # (bands.band_white_noise). The total scatter (the local fit's residual: noise, but
+        # also distortion that a correct model shares) still judges which bands can speak
+        # (LevelComparison.used_bands): as the error it is a noisy estimate, a third to six
+        # times a band's scatter over noise realisations, and it leaves out input noise
+        # times the part of the response not coherent with the force (bench/whitening.py)
+        err = _white_noise(measured, model, channel, band, edges, spectral, cache)
+    else:
+        # the measurement's scatter minus what the model's own record shows (nonlinear
+        # distortion and leakage, shared by both): its random noise (floored at a quarter)
+        err = np.sqrt(np.maximum(e_meas**2 - mm.noise**2, (0.25 * e_meas) ** 2))
     to_db = 20 / np.log(10) / np.sqrt(2)  # standard error in dB: ln|1 + e z| ~ Re(e z)
-    for (lo, c, hi), a, b, e, et in zip(edges, bm, bx, noise, e_meas, strict=True):
+    for (lo, c, hi), a, b, e, et in zip(edges, bm, bx, err, e_meas, strict=True):
         sel = (f >= lo) & (f < hi)
         if sel.sum() == 0 or not (np.isfinite(a) and np.isfinite(b)):
             continue
@@ -234,6 +257,7 @@ def _add_twins(study, measurements, runner, values, effects, levels, twins: int)
         if sig is None:  # a twin failed where the model did not: it counts for nothing
             continue
         t = compare_level(m.signals, sig, study.output, c.band, m.level, m.file,
+                          noise=noise_model(study),
                           error_band=c.error_band)
         c.db_twins.append(t.db_model if len(t.f) == len(c.f)
                           else np.interp(c.f, t.f, t.db_model))
@@ -280,6 +304,7 @@ def compare_measurements(study, measurements, runner, values=None, effects=(),
                                   f"{m.input_unit}); its error is in the run store")
             own, err = bands[i]
             c = compare_level(m.signals, sig, study.output, own, m.level, m.file,
+                              noise=noise_model(study),
                               error_band=err)
             if m.sweep is not None and c.kind == "sweep":
                 c.kind = m.sweep.kind

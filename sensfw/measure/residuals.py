@@ -32,7 +32,7 @@ from ..study import Study
 from . import discrepancy
 from .calibration import Trial
 from .checks import recorded_band
-from .compare import LevelComparison, compare_level
+from .compare import LevelComparison, compare_level, noise_model
 from .io import Measurement
 
 EffectSpecs = Sequence[Mapping[str, str]]
@@ -59,6 +59,8 @@ class Residuals:
                  space: DesignSpace | None = None, channels: Sequence[str] | None = None):
         self.study, self.meas, self.runner = study, list(measurements), runner
         self.space = space
+        #: the band errors' noise model (the study's ``[calibration] noise``)
+        self.noise = noise_model(study)
         self.channels = list(channels) if channels else shared_channels(study, measurements)
         self.kinds = [m.kind for m in self.meas]
         self.kind_weights: dict[str, float] = {}
@@ -123,12 +125,13 @@ class Residuals:
                     break
                 m = self.meas[i]
                 comps += [compare_level(m.signals, sig, ch, self.bands[i], m.level, m.file,
-                                        detail=detail) for ch in self.channels]
+                                        detail=detail, noise=self.noise)
+                          for ch in self.channels]
             out.append(comps)
         if self.entries is None and levels is None:
             first = next((c for c in out if c is not None), None)
             if first is not None:
-                self.entries = discrepancy.Entries.of(first)
+                self.entries = discrepancy.Entries.of(first, self.noise)
                 sizes = [s.stop - s.start for s in self.level_slices()]
                 per = {k: sum(n for n, kk in zip(sizes, self.kinds, strict=True) if kk == k)
                        for k in dict.fromkeys(self.kinds)}

@@ -194,10 +194,16 @@ class CalibrationResult(_Strict):
 class CalibrationSection(_Strict):
     """The base parameters diagnosis calibrates (design-variable names), optionally with
     narrower bounds; without it, every variable the screening stage ranks above its
-    threshold. ``result``: what the calibration that wrote the study found."""
+    threshold. ``noise``: how the standard error of a band entry of the residual vector is
+    estimated, ``"scatter"`` (the record's scatter about a local fit, the default) or
+    ``"propagated"`` (its white noise on output and excitation carried through the band's
+    H1, with the THD read against the record's noise floor; :mod:`sensfw.measure.discrepancy`).
+    ``result``: what the calibration that wrote the study found."""
 
     parameters: list[str] | None = None
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
+    #: how a band entry's standard error is estimated (sensfw.measure.compare.NOISE_MODELS)
+    noise: Literal["scatter", "propagated"] = "scatter"
     result: CalibrationResult | None = None
 
     @field_validator("parameters")

@@ -81,7 +81,8 @@ def test_a_run_at_every_level_is_evidence_for_each_level(study, records, runner)
 
 
 def test_the_thd_entry_adds_the_records_noise_to_the_models_thd():
-    """Noise adds in power to every order of a record, so the THD entry compares the
+    """Noise adds in power to every order of a record, so with the propagated noise model
+    the THD entry compares the
     model's THD combined in power with the record's noise floor (``thd_floor``): a linear
     model (no THD) against a measured THD at its floor (0.24 %) is right to within the
     floor's own scatter (0 dB here, not the -47 dB of a model floored at 1e-3 %); a model
@@ -96,7 +97,8 @@ def test_the_thd_entry_adds_the_records_noise_to_the_models_thd():
     cs = [SimpleNamespace(bands=band, thd_model=None, thd_measured=0.24, thd_floor=0.24),
           SimpleNamespace(bands=band, thd_model=2.0, thd_measured=2.0, thd_floor=0.24),
           SimpleNamespace(bands=band, thd_model=0.5, thd_measured=2.0, thd_floor=None)]
-    e = Entries(bands=((100.0,),) * 3, thd=(True,) * 3, sigma=((0.2, 1.5),) * 3)
+    e = Entries(bands=((100.0,),) * 3, thd=(True,) * 3, sigma=((0.2, 1.5),) * 3,
+                noise="propagated")
     r, s = residuals(cs, e)
     assert r[[0, 2, 4]] == pytest.approx([0.3] * 3)
     assert r[1] == pytest.approx(20 * math.log10(math.hypot(1e-3, 0.24) / 0.24), abs=1e-9)
@@ -104,3 +106,44 @@ def test_the_thd_entry_adds_the_records_noise_to_the_models_thd():
     assert r[3] == pytest.approx(0.0619, abs=1e-3)
     assert r[5] == pytest.approx(20 * math.log10(0.25))  # no floor known: the model alone
     assert s.tolist() == [0.2, 1.5] * 3
+    # the scatter noise model (the default) reads the model's THD alone
+    r, _ = residuals(cs, Entries(bands=e.bands, thd=e.thd, sigma=e.sigma))
+    assert r[1] == pytest.approx(20 * math.log10(1e-3 / 0.24))
+    assert r[3] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_studys_noise_model_sets_the_band_errors(study, records, runner):
+    """``[calibration] noise = "propagated"``: every band entry's standard error is the
+    record's white noise carried through its H1 (``band_white_noise``, combined with the
+    model-form floor), the nominal model is scored with the THD against the record's noise
+    floor, and the same records' entries under the default scatter model differ."""
+    import math
+
+    from sensfw.measure.bands import analysis_bands, band_white_noise
+    from sensfw.measure.discrepancy import MODEL_DB
+
+    data = study.spec.model_dump(exclude_none=True)
+    data.setdefault("calibration", {})["noise"] = "propagated"
+    propagated = Study.from_dict(data, "quick-short-propagated")
+    chirps = records[:2]  # one kind: no per-kind weights
+    space = study.calibration_space(["slide_stiffness"])
+    res = Residuals(propagated, chirps, runner, space)
+    res.nominal()
+    assert res.entries.noise == "propagated"
+    scatter = Residuals(study, chirps, runner, space)
+    scatter.nominal()
+    assert scatter.entries.noise == "scatter"
+    to_db = 20 / math.log(10) / math.sqrt(2)
+    m, ch = chirps[0], res.channels[0]
+    edges = analysis_bands(*res.bands[0])
+    # the synthetic record is the study's sweep: the model's drive is the ideal sweep, and
+    # the excitation's noise is the record's force less it (bands.band_white_noise's
+    # lower bound), whose std is the rig's 2 % of the force's RMS
+    sp = float(np.std(m.signals.force - m.drive.force(m.signals.t)))
+    e = dict(zip([c for _, c, _ in edges],
+                 band_white_noise(m.signals, ch, edges, res.bands[0], excitation_sigma=sp),
+                 strict=True))
+    sigma = res.entries.sigma[0]
+    for centre, s in zip(res.entries.bands[0], sigma, strict=False):
+        assert s == pytest.approx(math.hypot(to_db * e[centre], MODEL_DB), rel=1e-6)
+    assert res.entries.sigma != scatter.entries.sigma
