@@ -190,11 +190,10 @@ def band_white_noise(sig: Signals, channel: str, bands, band: tuple[float, float
                      output_sigma: float | None = None) -> np.ndarray:
     """Relative standard error of each band's H1 (:func:`band_frf_db`, ``H_b = sum conj(P)
     X / sum |P|^2``) from white noise on the output (``output_sigma``, default
-    :func:`noise_sigma`) and on the
-    excitation (``excitation_sigma``, default :func:`excitation_noise_sigma` over the
-    excitation's ``band``), to first
-    order (the delta method; Bendat & Piersol, *Random Data*, 4th ed. 2010, ch. 9, for the
-errors of frequency-response estimates with noise on input and output):
+    :func:`noise_sigma`) and on the excitation (``excitation_sigma``, default
+    :func:`excitation_noise_sigma` over the excitation's ``band``), to first order (the
+    delta method; Bendat & Piersol, *Random Data*, 4th ed. 2010, ch. 9, for the errors of
+    frequency-response estimates with noise on input and output):
 
     ``e_b^2 = n (sigma_x^2 sum |P|^2 + sigma_p^2 sum |X|^2) / |sum conj(P) X|^2``.
 

@@ -21,7 +21,8 @@ leaves residuals of unit variance:
   floor (:attr:`~sensfw.measure.comparison.LevelComparison.thd_floor`). Without it a
   correct, nearly linear model's THD entry is -5 to -11 dB at a low level and worse at
   higher noise, and an effect that adds distortion is credited with the noise's
-  (``bench/whitening.py``). At 5-10 % noise the scatter model leaves the truth above the
+  (``bench/whitening.py``; under ``"scatter"`` :func:`noise_thd_note` says where that
+  bias carries most of chi2). At 5-10 % noise the scatter model leaves the truth above the
   noise test's bound in 14 of 20 random cases and diagnosis names an effect in 3 of 8
   cases without one; the propagated model, in none (``bench/RECOVERY.md``, stop 61). It is
   not the default yet: at 1-5 % its errors are about 1.7 times the scatter they predict
@@ -112,6 +113,39 @@ def residuals(comparisons: Sequence, entries: Entries) -> tuple[np.ndarray, np.n
             r.append(20 * math.log10(model / c.thd_measured))
     s = [x for part in entries.sigma for x in part]
     return np.array(r, float), np.array(s, float)
+
+
+def noise_thd_note(comparisons: Sequence, entries: Entries, w: np.ndarray,
+                   channels: Sequence[str] = ()) -> str | None:
+    """A line saying how much of ``chi2 = |w|^2`` the THD entries carry where the measured
+    THD is no more than its record's own noise reads (``thd_floor``): there the entry
+    compares the model's distortion with noise, and a model that is right but nearly
+    linear is charged tens of dB for it (the module docstring's known bias). None where
+    such entries carry under half of chi2, and under the propagated noise model, whose THD
+    entry reads the model against the noise floor (no bias to name). ``channels``: the
+    channels of each level, in the comparisons' order (levels outer), to name them."""
+    if entries.noise == "propagated":
+        return None
+    total = float(w @ w)
+    i, share, where = 0, 0.0, []
+    for k, (c, centres, thd) in enumerate(zip(comparisons, entries.bands, entries.thd,
+                                              strict=True)):
+        i += len(centres)
+        if thd:
+            floor = getattr(c, "thd_floor", None)
+            if floor and c.thd_measured is not None and c.thd_measured <= floor:
+                share += float(w[i] ** 2)
+                ch = f"{channels[k % len(channels)]} " if channels else ""
+                where.append(f"{ch}at {c.level:g} ({c.thd_measured:.3g} % against "
+                             f"{floor:.3g} %)")
+            i += 1
+    if not total > 0 or share < 0.5 * total:
+        return None
+    return (f"{share:.4g} of chi2 {total:.4g} comes from THD entries whose measured THD is "
+            f"no more than the record's own noise reads ({'; '.join(where[:4])}"
+            + (f"; {len(where) - 4} more" if len(where) > 4 else "") + "): there the "
+            "measurement shows no distortion to fit, and a nearly linear model is charged "
+            "for the noise's; judge the fit by the band entries and compare's FRF error")
 
 
 def weighted(comparisons: Sequence, entries: Entries) -> np.ndarray:

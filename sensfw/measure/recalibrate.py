@@ -113,7 +113,8 @@ def recalibrate(study: Study, measurements: Sequence[Measurement], runner: Runne
                                              discrepancy.fits(unwidened, len(base))),
               "model_scatter_db": float(np.median(rough)) if len(rough) else 0.0,
               "trajectory": trajectory,
-              "notes": [n for n in [short, masked] if n],
+              "notes": [n for n in [short, masked, discrepancy.noise_thd_note(
+                  cal_cmp, res.entries, fit.best.w, res.channels)] if n],
               "n_simulations": res.n_simulations, "budget": budget,
               "records": res.records(), "kind_weights": res.kind_weights,
               "comparison": {"nominal model": [c.to_dict() for c in

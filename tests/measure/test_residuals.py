@@ -80,6 +80,28 @@ def test_a_run_at_every_level_is_evidence_for_each_level(study, records, runner)
     assert all(t.values["added_mass"] == 0.0 for t in extra)
 
 
+def test_thd_entries_that_compare_a_model_with_noise_are_named():
+    """Two levels, one channel: two bands and a THD entry each. Where the measured THD is
+    no more than the record's noise floor (0.22 % against 0.24 %) and its entry carries
+    most of chi2 (the probe's linear 2-DOF model: 1151 of 1201), a note names it; where
+    the measured THD stands above its floor, it is the model's misfit and no note."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from sensfw.measure.discrepancy import Entries, noise_thd_note
+
+    cs = [SimpleNamespace(level=0.5, thd_measured=0.22, thd_floor=0.24),
+          SimpleNamespace(level=1.0, thd_measured=2.0, thd_floor=0.24)]
+    e = Entries(bands=((100.0, 125.0), (100.0, 125.0)), thd=(True, True))
+    w = np.array([0.5, -0.3, 20.0, 0.4, 0.2, 1.0])
+    note = noise_thd_note(cs, e, w, ["a1"])
+    assert note.startswith("400 of chi2 401.5 comes from THD entries") and "a1 at 0.5 " in note
+    assert noise_thd_note(cs, e, np.array([0.5, -0.3, 1.0, 0.4, 0.2, 20.0]), ["a1"]) is None
+    # the propagated noise model reads the model's THD against the floor: no bias to name
+    assert noise_thd_note(cs, Entries(e.bands, e.thd, noise="propagated"), w, ["a1"]) is None
+
+
 def test_the_thd_entry_adds_the_records_noise_to_the_models_thd():
     """Noise adds in power to every order of a record, so with the propagated noise model
     the THD entry compares the
