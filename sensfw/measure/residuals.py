@@ -20,6 +20,7 @@ run at all levels also answers for any one of them.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -196,7 +197,9 @@ class Residuals:
             i += len(part)
         slices = self.level_slices()
         scale = old / new
-        self.entries = discrepancy.Entries(self.entries.bands, self.entries.thd, tuple(sigma))
+        # the same entries, and the same noise model (its THD entry reads the model against
+        # the record's noise floor), with the widened errors
+        self.entries = dataclasses.replace(self.entries, sigma=tuple(sigma))
         for pool in self._pool.values():
             for lv, t in pool:
                 if t.w is not None:

@@ -169,3 +169,25 @@ def test_the_studys_noise_model_sets_the_band_errors(study, records, runner):
     for centre, s in zip(res.entries.bands[0], sigma, strict=False):
         assert s == pytest.approx(math.hypot(to_db * e[centre], MODEL_DB), rel=1e-6)
     assert res.entries.sigma != scatter.entries.sigma
+
+
+def test_widening_the_errors_keeps_the_noise_model(study, records, runner):
+    """The model's scatter widens every error (``add_scatter``: diagnose does it after H0's
+    first calibration) and keeps the study's noise model. Stop 61's option lost it there,
+    so under ``"propagated"`` every evaluation after the widening read the THD entry
+    without the record's noise floor (recovery seed 2026, no effect: chi2 at the true
+    values 68.3 before the widening, 165.6 after it, against H0's 63.7). The dB residuals
+    stay what they were; each weighted entry shrinks by exactly old error / new error."""
+    data = study.spec.model_dump(exclude_none=True)
+    data.setdefault("calibration", {})["noise"] = "propagated"
+    propagated = Study.from_dict(data, "quick-short-propagated")
+    space = study.calibration_space(["slide_stiffness"])
+    res = Residuals(propagated, records[:2], runner, space)
+    nominal, _ = res.nominal()
+    (before,) = res.evaluate(None, [nominal], "before")
+    old = np.array([x for part in res.entries.sigma for x in part])
+    extra = np.full(len(old), 0.5)
+    res.add_scatter(extra)
+    assert res.entries.noise == "propagated"
+    (after,) = res.evaluate(None, [nominal], "after")
+    assert after == pytest.approx(before * old / np.hypot(old, extra), rel=1e-9)
