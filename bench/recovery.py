@@ -50,6 +50,8 @@ import tomllib  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+from sensfw.measure.compare import NOISE_MODELS, noise_model  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 #: the levels a case draws from (N for the quick study, V for the beam)
 LEVELS = {"quick": (0.03, 0.05, 0.1, 0.2), "bert": (0.05, 0.1, 0.2, 0.3)}
@@ -368,7 +370,7 @@ def main() -> None:
     ap.add_argument("--factors", type=_range, default=None, metavar="LO,HI",
                     help="the base variables' offsets as factors of their nominal values "
                          "(log-uniform; default 0.6,1.6)")
-    ap.add_argument("--noise-model", choices=["scatter", "propagated"], default=None,
+    ap.add_argument("--noise-model", choices=NOISE_MODELS, default=None,
                     help="the study's [calibration] noise: the band errors' noise model "
                          "(default the study's own, scatter)")
     ap.add_argument("--baseline", type=Path, nargs="*",
@@ -395,7 +397,7 @@ def main() -> None:
                      log=print if args.verbose else (lambda s: None), store=args.store,
                      from_nominal=args.from_nominal, budget_scale=args.budget_scale)
         r["store"] = str(args.store) if args.store else None
-        r["noise_model"] = study.spec.calibration.noise
+        r["noise_model"] = noise_model(study)
         r["from_nominal"] = args.from_nominal
         truth = f"{case['effect']}@{case['place']}" if case["effect"] else "no effect"
         print(f"case {i} ({truth}; {len(case['levels'])} level(s), noise "

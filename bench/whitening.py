@@ -61,7 +61,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=2025, help="seed of case 0 (case i: seed+i)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--store", type=Path, default=None, help="a run store to share")
-    ap.add_argument("--noise-model", choices=["scatter", "propagated"], default=None,
+    ap.add_argument("--noise-model", choices=rec.NOISE_MODELS, default=None,
                     help="the study's [calibration] noise (the band errors' noise model)")
     ap.add_argument("--noise", type=rec._range, default=None, metavar="LO,HI",
                     help="the cases' noise range (bench/recovery.py's --noise)")

@@ -18,6 +18,7 @@ import numpy as np
 from ..evaluate import simulate, variant_spec
 from ..models.base import Signals
 from ..signal.stepped import steps_of
+from ..study import schema
 from .bands import (
     FRACTIONS,
     SMOOTH,
@@ -123,8 +124,8 @@ def _white_noise(measured: Signals, model: Signals, channel: str, band, edges, s
 #: ``"scatter"``, the record's own scatter about a local fit less the model's (the default),
 #: or ``"propagated"``, its white noise on output and excitation carried through the band's
 #: H1 (:func:`~.bands.band_white_noise`), with the THD entry read against the record's
-#: noise floor (:class:`~.discrepancy.Entries`)
-NOISE_MODELS = ("scatter", "propagated")
+#: noise floor (:class:`~.discrepancy.Entries`); defined with the study's schema
+NOISE_MODELS = schema.NOISE_MODELS
 
 
 def noise_model(study) -> str:

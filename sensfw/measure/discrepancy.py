@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
@@ -80,8 +80,9 @@ class Entries:
 
     def select(self, keep) -> Entries:
         """The entries of the comparisons at the indices ``keep``."""
-        return Entries(tuple(self.bands[i] for i in keep), tuple(self.thd[i] for i in keep),
-                       tuple(self.sigma[i] for i in keep) if self.sigma else (), self.noise)
+        return replace(
+            self, bands=tuple(self.bands[i] for i in keep), thd=tuple(self.thd[i] for i in keep),
+            sigma=tuple(self.sigma[i] for i in keep) if self.sigma else ())
 
     def size(self) -> int:
         return sum(len(b) for b in self.bands) + sum(self.thd)

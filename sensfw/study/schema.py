@@ -4,7 +4,7 @@ model and the registries."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, field_validator
 
@@ -191,6 +191,12 @@ class CalibrationResult(_Strict):
     records: list[dict[str, str | float]] = Field(default_factory=list)
 
 
+#: how a band entry's standard error is estimated (``[calibration] noise``; the models are
+#: described at :data:`sensfw.measure.compare.NOISE_MODELS`)
+NoiseModel = Literal["scatter", "propagated"]
+NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)
+
+
 class CalibrationSection(_Strict):
     """The base parameters diagnosis calibrates (design-variable names), optionally with
     narrower bounds; without it, every variable the screening stage ranks above its
@@ -202,8 +208,8 @@ class CalibrationSection(_Strict):
 
     parameters: list[str] | None = None
     bounds: dict[str, ParameterOverride] = Field(default_factory=dict)
-    #: how a band entry's standard error is estimated (sensfw.measure.compare.NOISE_MODELS)
-    noise: Literal["scatter", "propagated"] = "scatter"
+    #: how a band entry's standard error is estimated (:data:`NOISE_MODELS`)
+    noise: NoiseModel = "scatter"
     result: CalibrationResult | None = None
 
     @field_validator("parameters")
