@@ -11,6 +11,7 @@ total scatter, noise and distortion (:func:`band_noise`: one local fit of the FR
 from __future__ import annotations
 
 import numpy as np
+from scipy.signal import ShortTimeFFT, windows
 
 from ..models.base import Signals
 from ..signal import frf, octave_smooth
@@ -142,47 +143,102 @@ def usable_limit(sig: Signals) -> float:
     return sig.fs / 2 if fr >= sig.fs * (1 - 1e-6) else fr / ALIAS_FREE
 
 
-def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
-    """Standard deviation of the output noise of a record (assumed white), from the
-    residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n sigma^2``,
-    read off a low quantile of the residual power over the bins (the power of complex
-    Gaussian noise is exponential, so its ``q``-quantile is ``-ln(1 - q)`` times its mean).
+def tf_noise_sigma(x: np.ndarray, fs: float, top: float | None = None,
+                   quantile: float = 0.05, nperseg: int | None = None) -> float:
+    """Standard deviation of the white noise in ``x`` from a low quantile of its
+    short-time spectrum's power (Hann frames of ``nperseg`` samples, half overlapping;
+    default the power of 2 nearest ``sqrt(2 n)``, as many frames as lines) over the frames
+    inside the record and the lines between the second and the last below ``top``.
 
-    Exact for a linear response; harmonic distortion of a swept record does not follow
-    the local fit either (its phase turns by ~1 rad per line relative to the force's), so a
-    strongly nonlinear record gives an upper bound: the low quantile keeps to the lines
-    where the distortion is weakest. 0 for a noise-free linear record.
+    A sweep's response, its harmonics and the ring-down of its resonances hold a few
+    lines of each frame; white noise holds every cell, with power exponential of mean
+    ``sigma^2 sum w^2`` (the first line and the last are not circular: left out), so the
+    ``q``-quantile is ``-ln(1 - q)`` times that mean where at least a fraction ``q`` of
+    the cells is noise alone (minimum statistics: R. Martin, "Noise power spectral density
+    estimation based on optimal smoothing and minimum statistics", IEEE Trans. Speech
+    Audio Process. 9, 2001). The structure's response leaks into every cell a little, so
+    this is an upper bound: 1.05-1.3 times the noise at 1-5 % of the quick study's output
+    RMS (``tests/measure/test_bands.py``). A response that fills the plane (a random
+    excitation over the whole band) reads as noise."""
+    x = np.asarray(x, float)
+    n = len(x)
+    if nperseg is None:
+        nperseg = int(np.clip(2 ** np.round(np.log2(np.sqrt(2 * n))), 16, 4096))
+    nperseg = min(nperseg, n)
+    w = windows.hann(nperseg, sym=False)
+    sft = ShortTimeFFT(w, hop=nperseg // 2, fs=fs)
+    S = sft.stft(x)
+    f = sft.f
+    top = fs / 2 if top is None else top
+    lines = np.flatnonzero(f < top * (1 - 1e-9))[1:-1]
+    p0, p1 = sft.lower_border_end[1], sft.upper_border_begin(n)[1]
+    if len(lines) < 2 or p1 <= p0:
+        return 0.0
+    power = np.abs(S[lines][:, p0:p1]) ** 2
+    mean = float(np.quantile(power, quantile)) / -np.log1p(-quantile)
+    return float(np.sqrt(mean / np.sum(w**2)))
+
+
+def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
+    """Standard deviation of the output noise of a record (assumed white): the lower of
+    two upper bounds, each exact for white noise alone.
+
+    - The residual of the local fit of :func:`band_noise`: per bin ``E|N_k|^2 = n
+      sigma^2``, read off a low quantile of the residual power over the bins (the power of
+      complex Gaussian noise is exponential, so its ``q``-quantile is ``-ln(1 - q)`` times
+      its mean). Close for a linear response (1.1-1.2 times the noise at 1 % on a
+      two-degree-of-freedom sweep), but a swept record's harmonic distortion does not
+      follow the local fit (its phase turns by ~1 rad per line relative to the force's),
+      and a contact's distortion fills every line: 1.1-11 times the noise at 1-5 % on the
+      quick study.
+    - The short-time spectrum's low quantile (:func:`tf_noise_sigma`): a sweep's response
+      and its harmonics hold a few lines of each frame, so the other cells are noise,
+      whatever the distortion (1.05-1.3 times the noise there); a random excitation's
+      response fills them, where the local fit holds.
+
+    The lower of two estimates that are each exact on noise alone reads a few per cent
+    low there. 0 for a noise-free linear record.
 
     A record resampled from a lower rate holds its noise below :func:`usable_limit` only;
-    the quantile is taken over those bins, which gives the white noise at the present
+    both quantiles are taken over those lines, which gives the white noise at the present
     rate of the same density there (for the mean over the record, the same standard
-    error as the recorded samples give: ``sigma_r^2 / n_r``). Over every bin it would be
+    error as the recorded samples give: ``sigma_r^2 / n_r``). Over every line it would be
     the empty stop band's, nearly 0."""
     f, _, _, resid = _local_fit(sig, channel)
-    held = resid[1:][f[1:] < usable_limit(sig)]
+    top = usable_limit(sig)
+    held = resid[1:][f[1:] < top]
     q = float(np.quantile(held if len(held) else resid[1:], quantile)) / -np.log1p(-quantile)
-    return float(np.sqrt(q / len(sig.force)))
+    local = float(np.sqrt(q / len(sig.force)))
+    return min(local, tf_noise_sigma(sig.channel(channel), sig.fs, top, quantile))
 
 
 def excitation_noise_sigma(sig: Signals, band: tuple[float, float],
                            min_bins: int = 32) -> float:
-    """Standard deviation of the noise on a record's excitation channel (assumed white),
-    from its spectrum above the excitation's band: between ``1.15 band[1]`` and 0.95 of
-    :func:`usable_limit` the force holds only its noise (and the sweep's leakage, which the
-    median leaves out), so per bin ``E|N_k|^2 = n sigma^2`` is the median power over those
-    bins divided by ``ln 2`` (the power of complex Gaussian noise is exponential). An upper
-    bound: a sweep's own spectrum does not end at its last frequency (its start and end
-    splatter over every bin), which reads as noise of about 2 % of the force's RMS on a
-    short log chirp, so at 1 % noise this gives 2-3 times the noise and at 10 % within 5 %
-    (``tests/measure/test_bands.py``). 0 where fewer than ``min_bins`` such bins exist (no
-    estimate: the band errors then hold the output noise alone)."""
-    P = np.fft.rfft(np.asarray(sig.force, float))
-    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
+    """Standard deviation of the noise on a record's excitation channel (assumed white):
+    the lower of two upper bounds.
+
+    - Its spectrum above the excitation's band: between ``1.15 band[1]`` and 0.95 of
+      :func:`usable_limit` the force holds only its noise (and the sweep's leakage, which
+      the median leaves out), so per bin ``E|N_k|^2 = n sigma^2`` is the median power over
+      those bins divided by ``ln 2`` (the power of complex Gaussian noise is
+      exponential). A sweep's own spectrum does not end at its last frequency (its start
+      and end splatter over every bin), which reads as noise of about 2 % of the force's
+      RMS on a short log chirp: at 1 % noise 2-3 times the noise, at 10 % within 5 %. Not
+      used where fewer than ``min_bins`` such bins exist.
+    - The short-time spectrum's low quantile (:func:`tf_noise_sigma`): a sweep holds one
+      line of each frame (1.0-1.3 times the noise at 1-10 %); a random excitation fills
+      its band, where the bound above holds.
+
+    ``tests/measure/test_bands.py`` measures both. A force without noise gives about 0."""
+    x = np.asarray(sig.force, float)
+    tf = tf_noise_sigma(x, sig.fs, usable_limit(sig))
+    P = np.fft.rfft(x)
+    f = np.fft.rfftfreq(len(x), 1 / sig.fs)
     sel = (f > 1.15 * band[1]) & (f < 0.95 * usable_limit(sig))
     if int(sel.sum()) < min_bins:
-        return 0.0
+        return tf
     per_bin = float(np.median(np.abs(P[sel]) ** 2)) / np.log(2.0)
-    return float(np.sqrt(per_bin / len(sig.force)))
+    return min(tf, float(np.sqrt(per_bin / len(x))))
 
 
 def band_white_noise(sig: Signals, channel: str, bands, band: tuple[float, float],
