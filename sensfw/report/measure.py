@@ -117,6 +117,12 @@ def _harmonic_frame(rows, output_unit: str | None = None) -> pd.DataFrame:
     return frame.astype(object).where(frame.notna(), "")
 
 
+def _small(x: float) -> str:
+    """Two decimals, or two significant digits below 0.1 (a noise floor far below the
+    figure beside it reads as its size, not as 0.00)."""
+    return f"{x:.2f}" if abs(x) >= 0.1 else f"{x:.2g}"
+
+
 def _summary(comparisons) -> pd.DataFrame:
     """One row per record: its level as what it is, the error, the resonance."""
     rows = []
@@ -128,14 +134,14 @@ def _summary(comparisons) -> pd.DataFrame:
         rows.append({
             "record": c.level_text, "file": Path(c.file).name if c.file else "",
             "FRF error (dB)": f"{c.error_db:.2f}",
-            "noise alone (dB)": "" if c.error_noise_db is None else f"{c.error_noise_db:.2f}",
+            "noise alone (dB)": "" if c.error_noise_db is None else _small(c.error_noise_db),
             "model's own scatter (dB)": "" if c.error_scatter_db is None
             else f"{c.error_scatter_db:.2f}",
             # as the record's own resonance table prints it (the lines are Hz apart)
             "strongest resonance, measured (Hz)": f"{r['measured_hz']:.4g}" if r else "",
             "model (Hz)": f"{r['model_hz']:.4g}" if r else "",
             "THD measured / model (%)": f"{c.thd_measured:.2f} / {c.thd_model:.2f}"
-            + (f" (noise alone {c.thd_floor:.2f})" if c.thd_floor else "")
+            + (f" (noise alone {_small(c.thd_floor)})" if c.thd_floor else "")
             if c.thd_measured is not None and c.thd_model is not None else ""})
     frame = pd.DataFrame(rows)
     for col in ("noise alone (dB)", "model's own scatter (dB)", "THD measured / model (%)"):

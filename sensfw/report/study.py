@@ -239,6 +239,17 @@ def drop_empty_columns(frame: pd.DataFrame, noted: Sequence[str] = ()
     return frame.drop(columns=empty), why
 
 
+def _dropped_shown(frame):
+    """The terms table with the p of a dropped coefficient (estimate 0 and p NaN, as
+    MATLAB reports one) written as "dropped" instead of "nan"."""
+    shown = frame.copy()
+    for side in ("paper", "as Fig. 10b:"):
+        est, p = f"{side} estimate", f"{side} p"
+        dropped = shown[p].isna() & (shown[est] == 0)
+        shown[p] = shown[p].astype(object).where(~dropped, "dropped")
+    return shown
+
+
 def comparison_section(page, result) -> None:
     """The study's Eq. 18 results beside the published ones its ``[compare_with]`` names
     (:mod:`sensfw.analysis.paper_comparison`): R²adj and significant terms per response,
@@ -272,7 +283,7 @@ def comparison_section(page, result) -> None:
         pub = ref.responses[r]
         page.h3(f"{pub.name}: every Eq. 18 term ({pub.source}; sensfw score "
                 f"{comp.summary.loc[r, 'sensfw score']})")
-        page.table(frame, highlight=frame["agreement (as Fig. 10b)"]
+        page.table(_dropped_shown(frame), highlight=frame["agreement (as Fig. 10b)"]
                    .str.startswith("both significant"))
         page.p("Highlighted: significant in both, as Fig. 10b. Estimates in physical units; "
                "the paper's response units are not stated, so compare signs, not sizes.",

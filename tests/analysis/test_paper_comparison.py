@@ -245,3 +245,20 @@ def test_a_study_report_sets_its_stage_beside_the_reference(tmp_path):
     # no confirmation runs: the empty columns are left out, with the reason
     assert "<th>confirm RMSE</th>" not in html and "<th>PI coverage</th>" not in html
     assert "confirm RMSE and PI coverage: left out, the stage has no confirmation runs" in html
+
+
+def test_a_dropped_coefficients_p_reads_dropped_in_the_report():
+    """MATLAB reports a coefficient it dropped as estimate 0, SE 0, t and p NaN (the
+    paper's intercept): the terms table says "dropped" there, keeps every other p, and
+    leaves a term the paper's table does not hold (estimate NaN) as it is."""
+    from sensfw.report.study import _dropped_shown
+
+    frame = pd.DataFrame({"paper estimate": [0.0, 1.2, np.nan],
+                          "paper p": [np.nan, 0.03, np.nan],
+                          "as Fig. 10b: estimate": [0.0, 1.1, 0.5],
+                          "as Fig. 10b: p": [np.nan, 0.04, 0.2]},
+                         index=["(Intercept)", "x1", "x9"])
+    shown = _dropped_shown(frame)
+    assert list(shown["paper p"][:2]) == ["dropped", 0.03] and np.isnan(shown["paper p"].iloc[2])
+    assert list(shown["as Fig. 10b: p"]) == ["dropped", 0.04, 0.2]
+    assert np.isnan(frame["paper p"].iloc[0])  # the analysis's frame is not changed

@@ -462,8 +462,9 @@ def test_preload_gives_even_harmonics_and_a_constant_shift(study, runner):
     slide bearing 1 now opens for 4 % of each cycle at 0.1 N, a one-sided contact loss that
     makes the restoring force asymmetric: H2/H1 8.5 dB above the model's (H3/H1 +12.8 dB,
     less than twice that). At 0.03 N H2/H1 is 14.6 dB above the model's, 3.3 times its
-    noise floor, where H3/H1 is within its floor (one even order and no odd one). The preload also makes two modes the model has visible at the
-    crankshaft's axial sensor (642 Hz axial, 1.69 kHz: new peaks). A 5 N preload changes
+    noise floor, where H3/H1 is within its floor (one even order and no odd one). The
+    preload also makes two modes the model has visible at the crankshaft's axial sensor
+    (642 Hz axial, 1.69 kHz: new peaks). A 5 N preload changes
     too little to show: +0.25 % and H2/H1 4 dB *below* the model's (it pushes contacts
     further closed)."""
     cmp = compare(study, runner, "preload@crankshaft:preload_force=20", [0.03, 0.1])
