@@ -204,12 +204,21 @@ def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
     rate of the same density there (for the mean over the record, the same standard
     error as the recorded samples give: ``sigma_r^2 / n_r``). Over every line it would be
     the empty stop band's, nearly 0."""
+    return min(local_fit_noise_sigma(sig, channel, quantile),
+               tf_noise_sigma(sig.channel(channel), sig.fs, usable_limit(sig), quantile))
+
+
+def local_fit_noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
+    """The first bound of :func:`noise_sigma` alone: the output noise read off a low
+    quantile of the local fit's residual power (:func:`_local_fit`) over the lines below
+    :func:`usable_limit`. Where a swept record's distortion fills every line it reads that
+    distortion as noise too (1.6 times the noise, median, over the quick study's random
+    cases; ``bench/noise_estimates.py``): an upper bound that the signature classes'
+    harmonic floors keep on purpose (:func:`sensfw.measure.distortion.harmonic_floor`)."""
     f, _, _, resid = _local_fit(sig, channel)
-    top = usable_limit(sig)
-    held = resid[1:][f[1:] < top]
+    held = resid[1:][f[1:] < usable_limit(sig)]
     q = float(np.quantile(held if len(held) else resid[1:], quantile)) / -np.log1p(-quantile)
-    local = float(np.sqrt(q / len(sig.force)))
-    return min(local, tf_noise_sigma(sig.channel(channel), sig.fs, top, quantile))
+    return float(np.sqrt(q / len(sig.force)))
 
 
 def excitation_noise_sigma(sig: Signals, band: tuple[float, float],
