@@ -157,9 +157,10 @@ def tf_noise_sigma(x: np.ndarray, fs: float, top: float | None = None,
     the cells is noise alone (minimum statistics: R. Martin, "Noise power spectral density
     estimation based on optimal smoothing and minimum statistics", IEEE Trans. Speech
     Audio Process. 9, 2001). The structure's response leaks into every cell a little, so
-    this is an upper bound: 1.05-1.3 times the noise at 1-5 % of the quick study's output
-    RMS (``tests/measure/test_bands.py``). A response that fills the plane (a random
-    excitation over the whole band) reads as noise."""
+    this is an upper bound: over the quick study's random cases at 1-5 % noise, 1.15 times
+    the output noise (median; 5-95 % 1.06-1.26) and 1.12 times the excitation's
+    (``bench/noise_estimates.py``; ``tests/measure/test_bands.py``). A response that
+    fills the plane (a random excitation over the whole band) reads as noise."""
     x = np.asarray(x, float)
     n = len(x)
     if nperseg is None:
@@ -189,15 +190,19 @@ def noise_sigma(sig: Signals, channel: str, quantile: float = 0.05) -> float:
       its mean). Close for a linear response (1.1-1.2 times the noise at 1 % on a
       two-degree-of-freedom sweep), but a swept record's harmonic distortion does not
       follow the local fit (its phase turns by ~1 rad per line relative to the force's),
-      and a contact's distortion fills every line: 1.1-11 times the noise at 1-5 % on the
-      quick study.
+      and a contact's distortion fills every line: over the quick study's random cases at
+      1-5 % noise 1.58 times the noise (median; 5-95 % 1.18-5.48).
     - The short-time spectrum's low quantile (:func:`tf_noise_sigma`): a sweep's response
       and its harmonics hold a few lines of each frame, so the other cells are noise,
-      whatever the distortion (1.05-1.3 times the noise there); a random excitation's
-      response fills them, where the local fit holds.
+      whatever the distortion (1.15 times the noise there, 5-95 % 1.06-1.26:
+      ``bench/noise_estimates.py``); a random excitation's response fills them, where the
+      local fit holds. On the UNESP-BERT records it reads about the same floor on all
+      twelve sweep and random records (Acc1 0.0043-0.0052 in the record's unit) where the
+      local fit grows with the level (0.016-1.4 on the sweeps).
 
     The lower of two estimates that are each exact on noise alone reads a few per cent
-    low there. 0 for a noise-free linear record.
+    low there. 0 for a noise-free linear record. The signature classes' harmonic floors
+    keep the first bound alone (:func:`local_fit_noise_sigma`).
 
     A record resampled from a lower rate holds its noise below :func:`usable_limit` only;
     both quantiles are taken over those lines, which gives the white noise at the present
