@@ -33,30 +33,6 @@ import numpy as np  # noqa: E402
 import recovery as rec  # noqa: E402
 
 
-def local_fit_sigma(sig, channel: str, quantile: float = 0.05) -> float:
-    """The output noise from the local fit's residual alone (``noise_sigma`` before stop
-    63): a low quantile of the residual power over the lines below the usable limit."""
-    from sensfw.measure import bands
-
-    f, _, _, resid = bands._local_fit(sig, channel)
-    held = resid[1:][f[1:] < bands.usable_limit(sig)]
-    q = float(np.quantile(held, quantile)) / -np.log1p(-quantile)
-    return float(np.sqrt(q / len(sig.force)))
-
-
-def spectral_sigma(sig, band: tuple[float, float]) -> float:
-    """The excitation's noise from its spectrum above the band alone
-    (``excitation_noise_sigma`` before stop 63); 0 without such lines."""
-    from sensfw.measure import bands
-
-    P = np.fft.rfft(np.asarray(sig.force, float))
-    f = np.fft.rfftfreq(len(sig.force), 1 / sig.fs)
-    sel = (f > 1.15 * band[1]) & (f < 0.95 * bands.usable_limit(sig))
-    if int(sel.sum()) < 32:
-        return 0.0
-    return float(np.sqrt(np.median(np.abs(P[sel]) ** 2) / np.log(2.0) / len(sig.force)))
-
-
 def summary(name: str, ratios) -> str:
     r = np.asarray(ratios, float)
     lo, med, hi = np.percentile(r, [5, 50, 95])
@@ -98,14 +74,16 @@ def main() -> None:
                 sig = record(clean, Rig(noise=case["noise"]), level, rng)
                 top = bands.usable_limit(sig)
                 out["excitation"].append(bands.excitation_noise_sigma(sig, band) / sp)
-                out["excitation: above the band"].append(spectral_sigma(sig, band) / sp)
+                out["excitation: above the band"].append(
+                    (bands.above_band_noise_sigma(sig, band) or 0.0) / sp)
                 out["excitation: short-time"].append(
                     bands.tf_noise_sigma(sig.force, sig.fs, top) / sp)
                 for ch, x in clean.channels.items():
                     sx = case["noise"] * float(np.sqrt(np.mean(x**2)))
                     est = bands.noise_sigma(sig, ch) / sx
                     out["output"].append(est)
-                    out["output: local fit"].append(local_fit_sigma(sig, ch) / sx)
+                    out["output: local fit"].append(
+                        bands.local_fit_noise_sigma(sig, ch) / sx)
                     out["output: short-time"].append(
                         bands.tf_noise_sigma(sig.channel(ch), sig.fs, top) / sx)
                     worst.append(est)

@@ -244,15 +244,24 @@ def excitation_noise_sigma(sig: Signals, band: tuple[float, float],
       its band, where the bound above holds.
 
     ``tests/measure/test_bands.py`` measures both. A force without noise gives about 0."""
+    tf = tf_noise_sigma(np.asarray(sig.force, float), sig.fs, usable_limit(sig))
+    above = above_band_noise_sigma(sig, band, min_bins)
+    return tf if above is None else min(tf, above)
+
+
+def above_band_noise_sigma(sig: Signals, band: tuple[float, float],
+                           min_bins: int = 32) -> float | None:
+    """The first bound of :func:`excitation_noise_sigma` alone: the excitation's noise
+    from the median power of its spectrum between ``1.15 band[1]`` and 0.95 of
+    :func:`usable_limit`; ``None`` where fewer than ``min_bins`` lines lie there."""
     x = np.asarray(sig.force, float)
-    tf = tf_noise_sigma(x, sig.fs, usable_limit(sig))
     P = np.fft.rfft(x)
     f = np.fft.rfftfreq(len(x), 1 / sig.fs)
     sel = (f > 1.15 * band[1]) & (f < 0.95 * usable_limit(sig))
     if int(sel.sum()) < min_bins:
-        return tf
+        return None
     per_bin = float(np.median(np.abs(P[sel]) ** 2)) / np.log(2.0)
-    return min(tf, float(np.sqrt(per_bin / len(x))))
+    return float(np.sqrt(per_bin / len(x)))
 
 
 def band_white_noise(sig: Signals, channel: str, bands, band: tuple[float, float],
